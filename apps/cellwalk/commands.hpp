@@ -1,0 +1,18 @@
+// The subcommands of the one cellwalk binary. Each registers itself on the root app; the
+// command files only parse arguments, call the library and print.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace cellwalk::app {
+
+void register_generate(CLI::App& root);
+void register_import(CLI::App& root);
+void register_path(CLI::App& root);
+void register_walk(CLI::App& root);
+void register_compare(CLI::App& root);
+void register_view(CLI::App& root);
+void register_info(CLI::App& root);
+void register_render(CLI::App& root);
+
+}  // namespace cellwalk::app

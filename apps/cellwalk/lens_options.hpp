@@ -1,0 +1,44 @@
+// Options shared by every command that renders: image size, field of view, GPU budget.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "cellwalk/camera.hpp"
+#include "cellwalk/renderer.hpp"
+
+namespace cellwalk::app {
+
+struct LensOptions {
+  int width = 640;
+  int height = 480;
+  float fov_y_deg = 60.0f;
+  float near_plane = 0.25f;
+  float far_plane = 5000.0f;
+  double gpu_budget_mib = 512.0;
+
+  void add_to(CLI::App& cmd) {
+    cmd.add_option("--width", width, "Image width in pixels")->capture_default_str()->check(CLI::Range(16, 8192));
+    cmd.add_option("--height", height, "Image height in pixels")->capture_default_str()->check(CLI::Range(16, 8192));
+    cmd.add_option("--fov", fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(CLI::Range(1.0f, 170.0f));
+    cmd.add_option("--near", near_plane, "Near plane, metres")->capture_default_str()->check(CLI::PositiveNumber);
+    cmd.add_option("--far", far_plane, "Far plane, metres")->capture_default_str()->check(CLI::PositiveNumber);
+    cmd.add_option("--gpu-budget", gpu_budget_mib, "GPU buffer cache budget, MiB")->capture_default_str()->check(CLI::NonNegativeNumber);
+  }
+  Camera lens() const {
+    Camera c;
+    c.fov_y_deg = fov_y_deg;
+    c.aspect = float(width) / float(height);
+    c.near_plane = near_plane;
+    c.far_plane = far_plane;
+    return c;
+  }
+  RenderSettings render_settings() const {
+    RenderSettings s;
+    s.width = width;
+    s.height = height;
+    s.gpu_budget_bytes = static_cast<uint64_t>(gpu_budget_mib * 1024 * 1024);
+    return s;
+  }
+};
+
+}  // namespace cellwalk::app

@@ -1,0 +1,45 @@
+// What every strategy reports per frame, the same way, so strategies can be compared.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cellwalk {
+
+struct FrameStats {
+  int frame = 0;
+  double time = 0.0;  // path time, seconds
+  double query_ms = 0.0;   // choosing what to draw (culling, index search, visibility)
+  double io_ms = 0.0;      // reading from the store / file
+  double decode_ms = 0.0;  // turning bytes into meshes
+  double render_ms = 0.0;  // drawing, including upload and glFinish
+  double frame_ms = 0.0;   // wall time of the whole frame
+  uint64_t triangles = 0;
+  uint64_t objects = 0;
+  uint64_t bytes_read = 0;
+  uint64_t cache_hits = 0;
+  uint64_t cache_misses = 0;
+  uint64_t resident_bytes = 0;  // geometry held in memory at the end of the frame
+  bool stall = false;           // the frame waited for data it needed
+};
+
+struct WalkSummary {
+  std::string strategy;
+  size_t frames = 0;
+  double mean_ms = 0, stddev_ms = 0, p50_ms = 0, p95_ms = 0, p99_ms = 0, max_ms = 0;
+  double mean_query_ms = 0, mean_io_ms = 0, mean_decode_ms = 0, mean_render_ms = 0;
+  uint64_t total_triangles = 0, total_bytes_read = 0, cache_hits = 0, cache_misses = 0;
+  uint64_t stalls = 0;
+  uint64_t peak_resident_bytes = 0;
+};
+
+WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>& frames);
+
+// CSV with a header row, one row per frame; JSON for the summary. Both written to a temporary
+// name and renamed.
+void write_frames_csv(const std::vector<FrameStats>& frames, const std::string& file);
+void write_summary_json(const WalkSummary& summary, const std::string& file);
+std::string to_json(const WalkSummary& summary);
+
+}  // namespace cellwalk

@@ -1,0 +1,52 @@
+// Camera paths: the recorded or generated sequence of viewpoints every comparison replays.
+//
+// Text format (docs/path-format.md): a first line "# cellwalk path 1", further lines starting
+// with '#' are comments, then one line per frame:
+//   <time s> <x> <y> <z> <yaw deg> <pitch deg>
+// Times are non-decreasing. Positions are metres in world space.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cellwalk/camera.hpp"
+#include "cellwalk/scene.hpp"
+
+namespace cellwalk {
+
+struct PathFrame {
+  double time = 0.0;
+  Vec3 position{0.0f};
+  float yaw_deg = 0.0f;
+  float pitch_deg = 0.0f;
+};
+
+struct CameraPath {
+  std::vector<PathFrame> frames;
+};
+
+CameraPath read_path(const std::string& file);
+// Writes to a temporary name and renames: an existing path file survives a failure.
+void write_path(const CameraPath& path, const std::string& file);
+
+// Places `camera` at a frame (keeps its lens).
+void apply(const PathFrame& frame, Camera& camera);
+
+// The session kinds the seeds replay (HDoV thesis §4.4, Li–Chiang, vLOD).
+enum class SessionKind { kNormal, kSlow, kFast, kTurning, kBackward, kBackAndForth, kRandom };
+SessionKind parse_session_kind(const std::string& name);  // throws Error on an unknown name
+const char* to_string(SessionKind kind);
+
+struct PathParams {
+  SessionKind kind = SessionKind::kNormal;
+  int frames = 600;
+  double fps = 30.0;
+  uint64_t seed = 1;
+};
+
+// A path that stays on the scene's navigation graph (so in streets, never inside buildings).
+// Deterministic for given params and graph. Throws Error if the graph has no edges.
+CameraPath generate_path(const NavGraph& nav, const PathParams& params);
+
+}  // namespace cellwalk

@@ -1,0 +1,98 @@
+// The OpenGL 4.5 core renderer: one code path, two ways to get a context (headless EGL on the
+// surfaceless platform, or a GLFW window). Renders a draw list into colour, depth and a
+// per-object id buffer with fixed, deterministic lighting.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "cellwalk/camera.hpp"
+#include "cellwalk/image.hpp"
+#include "cellwalk/mesh.hpp"
+
+namespace cellwalk {
+
+// A current OpenGL 4.5 core context. Creating one makes it current on the calling thread.
+class GlContext {
+ public:
+  virtual ~GlContext() = default;
+  // Headless: EGL with the surfaceless platform (Mesa llvmpipe without a GPU or X server).
+  // Throws Error saying what is missing (e.g. Mesa's EGL) when no context can be made.
+  static std::unique_ptr<GlContext> headless();
+  virtual std::string renderer_name() const = 0;  // GL_RENDERER
+};
+
+// What to draw: an object at one of its levels of detail.
+struct DrawItem {
+  ObjectId object = 0;
+  uint32_t lod = 0;
+  Rgba8 color = rgba8(200, 200, 200);  // used when the mesh has no per-vertex colours
+};
+
+// Supplies the geometry of a draw item that is not resident on the GPU. The pointer must stay
+// valid until the provider is called again. Returning nullptr skips the item (data not ready).
+using MeshProvider = std::function<const Mesh*(const DrawItem&)>;
+
+// A world-space segment for overlays: frustums and boxes in a bird's-eye view.
+struct LineSegment {
+  Vec3 a{0.0f};
+  Vec3 b{0.0f};
+  Rgba8 color = rgba8(255, 255, 0);
+};
+
+struct RenderStats {
+  uint64_t triangles = 0;
+  uint64_t objects = 0;
+  uint64_t gpu_hits = 0;
+  uint64_t gpu_misses = 0;
+  uint64_t uploaded_bytes = 0;
+  uint64_t gpu_resident_bytes = 0;  // after the frame; never above the budget
+  double ms = 0.0;                  // wall time including glFinish
+};
+
+struct RenderSettings {
+  int width = 640;
+  int height = 480;
+  Rgba8 background = rgba8(178, 204, 230);
+  // GPU-side vertex and index buffers are cached under this many bytes (LRU). A mesh larger
+  // than the whole budget is drawn from a transient buffer and not kept.
+  uint64_t gpu_budget_bytes = 512ull << 20;
+};
+
+// REQUIRES: a current GlContext (or window context) on the calling thread for its lifetime.
+class Renderer {
+ public:
+  explicit Renderer(const RenderSettings& settings);
+  ~Renderer();
+
+  // Renders items into the offscreen targets and waits for the GPU, so the time is real.
+  // Items are drawn in ascending (object, lod) order whatever their order in `items`, so any
+  // subset of a list renders its objects' pixels exactly as the full list does.
+  RenderStats render(const Camera& camera, std::span<const DrawItem> items,
+                     const MeshProvider& provider);
+
+  // Overlays, drawn over the colour target of the last render() (so read_color() and present()
+  // include them) without depth test; the id target is left as render() wrote it. Call them
+  // after render(), which clears everything. One-pixel lines (all core profiles guarantee).
+  void draw_lines(const Camera& camera, std::span<const LineSegment> segments);
+  // ASCII text in stb_easy_font's 8-pixel-high glyphs times `scale`; (x, y) is the top-left
+  // corner in pixels from the image's top-left; '\n' starts a new line.
+  void draw_text(float x, float y, std::string_view text, Rgba8 color, float scale = 1.0f);
+
+  Image read_color() const;
+  IdImage read_ids() const;
+  // Copies the colour target to the default framebuffer (the window) at its size.
+  void present(int window_width, int window_height) const;
+
+  const RenderSettings& settings() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk

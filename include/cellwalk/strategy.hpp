@@ -1,0 +1,46 @@
+// The seam every walkthrough system plugs into. A strategy chooses, per frame, what to draw
+// (objects and levels of detail) and supplies their geometry through its own storage; the
+// walk harness renders and measures every strategy the same way.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cellwalk/camera.hpp"
+#include "cellwalk/frame_stats.hpp"
+#include "cellwalk/renderer.hpp"
+#include "cellwalk/scene_file.hpp"
+
+namespace cellwalk {
+
+class Strategy {
+ public:
+  virtual ~Strategy() = default;
+  virtual std::string name() const = 0;
+
+  // Replaces `items` with what to draw from `camera`. Adds query time (and any I/O it does)
+  // to `stats`.
+  virtual void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) = 0;
+
+  // The geometry of an item the renderer does not hold. The pointer stays valid until the
+  // next call. Adds I/O and decode time, bytes read, hits and misses to `stats`. nullptr means
+  // the data is not available this frame (the frame then counts as a stall).
+  virtual const Mesh* mesh(const DrawItem& item, FrameStats& stats) = 0;
+
+  // Bytes of geometry and index data the strategy holds in memory now.
+  virtual uint64_t resident_bytes() const = 0;
+};
+
+struct StrategyOptions {
+  uint64_t memory_budget_bytes = 0;  // 0 = unbounded
+};
+
+// Names accepted by make_strategy, for --help and errors.
+std::vector<std::string> strategy_names();
+
+// REQUIRES: `scene` outlives the strategy. Throws Error on an unknown name.
+std::unique_ptr<Strategy> make_strategy(const std::string& name, const SceneReader& scene,
+                                        const StrategyOptions& options);
+
+}  // namespace cellwalk

@@ -1,0 +1,111 @@
+// The GPU mesh cache: one buffer per (object, lod), LRU under a byte budget.
+#include "render/gpu_mesh_cache.hpp"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+namespace cellwalk::render {
+namespace {
+
+constexpr uint32_t kPositionBytes = 12;
+constexpr uint32_t kNormalBytes = 4;
+constexpr uint32_t kColorBytes = 4;
+
+uint32_t stride_for(const Mesh& mesh) {
+  return kPositionBytes + kNormalBytes + (mesh.colors.empty() ? 0 : kColorBytes);
+}
+
+uint32_t snorm10(float v) {
+  return uint32_t(int32_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 511.0f))) & 0x3FFu;
+}
+
+// GL_INT_2_10_10_10_REV: x in the low bits, w (unused) in the top two.
+uint32_t pack_normal(const Vec3& n) { return snorm10(n.x) | snorm10(n.y) << 10 | snorm10(n.z) << 20; }
+
+void interleave(const Mesh& mesh, const std::vector<Vec3>& normals, uint32_t stride,
+                uint8_t* out) {
+  for (size_t i = 0; i < mesh.positions.size(); ++i, out += stride) {
+    std::memcpy(out, &mesh.positions[i], kPositionBytes);
+    uint32_t normal = pack_normal(normals[i]);
+    std::memcpy(out + kPositionBytes, &normal, kNormalBytes);
+    if (!mesh.colors.empty()) {
+      std::memcpy(out + kPositionBytes + kNormalBytes, &mesh.colors[i], kColorBytes);
+    }
+  }
+}
+
+}  // namespace
+
+uint64_t GpuMesh::bytes_for(const Mesh& mesh) {
+  return uint64_t(stride_for(mesh)) * mesh.positions.size() + sizeof(uint32_t) * mesh.indices.size();
+}
+
+GpuMesh::GpuMesh(const Mesh& mesh)
+    : bytes_(bytes_for(mesh)),
+      stride_(stride_for(mesh)),
+      has_colors_(!mesh.colors.empty()),
+      index_offset_(uint64_t(stride_) * mesh.positions.size()),
+      index_count_(uint32_t(mesh.indices.size())) {
+  // Meshes without normals get smooth ones so they are lit like the rest.
+  std::optional<Mesh> with_normals;
+  if (mesh.normals.empty()) {
+    with_normals = mesh;
+    compute_normals(*with_normals);
+  }
+  const std::vector<Vec3>& normals = with_normals ? with_normals->normals : mesh.normals;
+
+  // Written in place through a mapping: no CPU staging copy as large as the mesh.
+  // GL refuses zero-sized storage; an empty mesh still gets a (never drawn) one-byte buffer.
+  GLsizeiptr size = GLsizeiptr(std::max<uint64_t>(bytes_, 1));
+  glCreateBuffers(1, &buffer_);
+  glNamedBufferStorage(buffer_, size, nullptr, GL_MAP_WRITE_BIT);
+  auto* out = static_cast<uint8_t*>(
+      glMapNamedBufferRange(buffer_, 0, size, GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
+  interleave(mesh, normals, stride_, out);
+  std::memcpy(out + index_offset_, mesh.indices.data(), sizeof(uint32_t) * mesh.indices.size());
+  glUnmapNamedBuffer(buffer_);
+}
+
+GpuMesh::~GpuMesh() {
+  if (buffer_ != 0) glDeleteBuffers(1, &buffer_);
+}
+
+GpuMesh::GpuMesh(GpuMesh&& other) noexcept
+    : buffer_(std::exchange(other.buffer_, 0)),
+      bytes_(other.bytes_),
+      stride_(other.stride_),
+      has_colors_(other.has_colors_),
+      index_offset_(other.index_offset_),
+      index_count_(other.index_count_) {}
+
+const GpuMesh* GpuMeshCache::find(const MeshKey& key) {
+  auto it = index_.find(key);
+  if (it == index_.end()) return nullptr;
+  entries_.splice(entries_.begin(), entries_, it->second);
+  return &it->second->second;
+}
+
+const GpuMesh* GpuMeshCache::insert(const MeshKey& key, const Mesh& mesh) {
+  assert(index_.count(key) == 0);
+  uint64_t bytes = GpuMesh::bytes_for(mesh);
+  assert(bytes <= budget_);
+  while (resident_bytes_ + bytes > budget_) evict_least_recent();
+  entries_.emplace_front(key, GpuMesh(mesh));
+  index_.emplace(key, entries_.begin());
+  resident_bytes_ += bytes;
+  return &entries_.front().second;
+}
+
+void GpuMeshCache::evict_least_recent() {
+  assert(!entries_.empty());
+  resident_bytes_ -= entries_.back().second.bytes();
+  index_.erase(entries_.back().first);
+  entries_.pop_back();
+}
+
+}  // namespace cellwalk::render

@@ -1,0 +1,88 @@
+// Meshes resident on the GPU, keyed by (object, lod), kept under a byte budget with
+// least-recently-used eviction. The renderer draws from here; the store's budget on the CPU
+// side is separate.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <list>
+#include <unordered_map>
+#include <utility>
+
+#include "cellwalk/mesh.hpp"
+
+namespace cellwalk::render {
+
+// One mesh in one GL buffer: interleaved vertices (position float3, normal packed
+// 2_10_10_10 snorm, then colour RGBA8 only when the mesh has colours), then 32-bit indices.
+// REQUIRES: a current GL context for the lifetime of the object.
+class GpuMesh {
+ public:
+  // Bytes the buffer for `mesh` takes: what budgets count.
+  static uint64_t bytes_for(const Mesh& mesh);
+  // Uploads `mesh`, computing normals when it has none. REQUIRES: `mesh` passes validate().
+  explicit GpuMesh(const Mesh& mesh);
+  ~GpuMesh();
+  GpuMesh(GpuMesh&& other) noexcept;
+  GpuMesh& operator=(GpuMesh&&) = delete;
+  GpuMesh(const GpuMesh&) = delete;
+  GpuMesh& operator=(const GpuMesh&) = delete;
+
+  uint32_t buffer() const { return buffer_; }
+  uint64_t bytes() const { return bytes_; }
+  uint32_t stride() const { return stride_; }
+  bool has_colors() const { return has_colors_; }
+  uint64_t index_offset() const { return index_offset_; }
+  uint32_t index_count() const { return index_count_; }
+
+ private:
+  uint32_t buffer_ = 0;
+  uint64_t bytes_ = 0;
+  uint32_t stride_ = 0;
+  bool has_colors_ = false;
+  uint64_t index_offset_ = 0;
+  uint32_t index_count_ = 0;
+};
+
+struct MeshKey {
+  ObjectId object = 0;
+  uint32_t lod = 0;
+  bool operator==(const MeshKey&) const = default;
+};
+
+struct MeshKeyHash {
+  size_t operator()(const MeshKey& key) const {
+    return std::hash<uint64_t>()(uint64_t(key.object) << 32 | key.lod);
+  }
+};
+
+// Invariant: resident_bytes() <= budget() at every moment, including during an insert (room is
+// made before the upload). Deleting a buffer that a queued draw still reads is safe in GL: the
+// name dies at once, the storage lives until the commands using it complete (OpenGL 4.5 core
+// §5.1.3), so entries drawn earlier in the same frame may be evicted.
+class GpuMeshCache {
+ public:
+  explicit GpuMeshCache(uint64_t budget_bytes) : budget_(budget_bytes) {}
+
+  // The resident mesh for `key`, now the most recently used; nullptr when not resident.
+  const GpuMesh* find(const MeshKey& key);
+  // Evicts least recently used meshes until `mesh` fits, then uploads and keeps it.
+  // REQUIRES: `key` is not resident and GpuMesh::bytes_for(mesh) <= budget().
+  const GpuMesh* insert(const MeshKey& key, const Mesh& mesh);
+
+  uint64_t budget() const { return budget_; }
+  uint64_t resident_bytes() const { return resident_bytes_; }
+  size_t size() const { return entries_.size(); }
+
+ private:
+  using Entries = std::list<std::pair<MeshKey, GpuMesh>>;  // front = most recently used
+
+  void evict_least_recent();
+
+  uint64_t budget_;
+  uint64_t resident_bytes_ = 0;
+  Entries entries_;
+  std::unordered_map<MeshKey, Entries::iterator, MeshKeyHash> index_;
+};
+
+}  // namespace cellwalk::render

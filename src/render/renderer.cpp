@@ -1,0 +1,333 @@
+// The OpenGL 4.5 core renderer: draws a draw list into an offscreen framebuffer (RGBA8 colour,
+// R32UI object id + 1, 32-bit float depth) with the GPU mesh cache in front of the provider.
+#include "cellwalk/renderer.hpp"
+
+#include <epoxy/gl.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "cellwalk/error.hpp"
+#include "render/gpu_mesh_cache.hpp"
+#include "render/shaders.hpp"
+#include "render/text_overlay.hpp"
+
+namespace cellwalk {
+namespace {
+
+constexpr std::string_view kWhere = "renderer";
+
+GLuint compile_shader(GLenum stage, const char* source) {
+  GLuint shader = glCreateShader(stage);
+  glShaderSource(shader, 1, &source, nullptr);
+  glCompileShader(shader);
+  GLint ok = GL_FALSE;
+  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    std::array<char, 4096> log{};
+    glGetShaderInfoLog(shader, GLsizei(log.size()), nullptr, log.data());
+    glDeleteShader(shader);
+    fail(kWhere, std::string("shader does not compile: ") + log.data());
+  }
+  return shader;
+}
+
+GLuint link_program(const char* vertex_source, const char* fragment_source) {
+  GLuint vertex = compile_shader(GL_VERTEX_SHADER, vertex_source);
+  GLuint fragment = compile_shader(GL_FRAGMENT_SHADER, fragment_source);
+  GLuint program = glCreateProgram();
+  glAttachShader(program, vertex);
+  glAttachShader(program, fragment);
+  glLinkProgram(program);
+  glDeleteShader(vertex);  // flagged: freed with the program
+  glDeleteShader(fragment);
+  GLint ok = GL_FALSE;
+  glGetProgramiv(program, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    std::array<char, 4096> log{};
+    glGetProgramInfoLog(program, GLsizei(log.size()), nullptr, log.data());
+    glDeleteProgram(program);
+    fail(kWhere, std::string("shader program does not link: ") + log.data());
+  }
+  return program;
+}
+
+void require_gl_45() {
+  GLint major = 0, minor = 0;
+  glGetIntegerv(GL_MAJOR_VERSION, &major);
+  glGetIntegerv(GL_MINOR_VERSION, &minor);
+  if (major * 10 + minor < 45) {
+    fail(kWhere, "needs OpenGL 4.5, the current context has " + std::to_string(major) + "." +
+                     std::to_string(minor));
+  }
+}
+
+std::array<float, 4> unpack_color(Rgba8 c) {
+  return {float(c & 0xFF) / 255.0f, float(c >> 8 & 0xFF) / 255.0f, float(c >> 16 & 0xFF) / 255.0f,
+          float(c >> 24) / 255.0f};
+}
+
+GLuint make_renderbuffer(GLenum format, int width, int height) {
+  GLuint renderbuffer = 0;
+  glCreateRenderbuffers(1, &renderbuffer);
+  glNamedRenderbufferStorage(renderbuffer, format, width, height);
+  return renderbuffer;
+}
+
+// Vertex layout of render::GpuMesh; the buffer binding (stride) is set per draw.
+GLuint make_mesh_vertex_array() {
+  GLuint vao = 0;
+  glCreateVertexArrays(1, &vao);
+  auto attribute = [vao](GLuint index, GLint size, GLenum type, GLboolean normalized,
+                         GLuint offset) {
+    glVertexArrayAttribFormat(vao, index, size, type, normalized, offset);
+    glVertexArrayAttribBinding(vao, index, 0);
+  };
+  attribute(render::kPositionAttribute, 3, GL_FLOAT, GL_FALSE, 0);
+  attribute(render::kNormalAttribute, 4, GL_INT_2_10_10_10_REV, GL_TRUE, 12);
+  attribute(render::kColorAttribute, 4, GL_UNSIGNED_BYTE, GL_TRUE, 16);
+  glEnableVertexArrayAttrib(vao, render::kPositionAttribute);
+  glEnableVertexArrayAttrib(vao, render::kNormalAttribute);
+  return vao;
+}
+
+// Vertex layout of render::OverlayVertex, in its own buffer bound at binding 0.
+GLuint make_overlay_vertex_array(GLuint buffer) {
+  GLuint vao = 0;
+  glCreateVertexArrays(1, &vao);
+  glVertexArrayAttribFormat(vao, render::kPositionAttribute, 3, GL_FLOAT, GL_FALSE, 0);
+  glVertexArrayAttribFormat(vao, render::kColorAttribute, 4, GL_UNSIGNED_BYTE, GL_TRUE, 12);
+  for (GLuint attribute : {render::kPositionAttribute, render::kColorAttribute}) {
+    glVertexArrayAttribBinding(vao, attribute, 0);
+    glEnableVertexArrayAttrib(vao, attribute);
+  }
+  glVertexArrayVertexBuffer(vao, 0, buffer, 0, sizeof(render::OverlayVertex));
+  return vao;
+}
+
+}  // namespace
+
+struct Renderer::Impl {
+  explicit Impl(const RenderSettings& s) : settings(s), cache(s.gpu_budget_bytes) {
+    require_gl_45();
+    if (s.width <= 0 || s.height <= 0) {
+      fail(kWhere, "image size must be positive, got " + std::to_string(s.width) + "x" +
+                       std::to_string(s.height));
+    }
+    create_framebuffer();
+    program = link_program(render::kMeshVertexShader, render::kMeshFragmentShader);
+    vao = make_mesh_vertex_array();
+    overlay_program = link_program(render::kOverlayVertexShader, render::kOverlayFragmentShader);
+    glCreateBuffers(1, &overlay_buffer);
+    overlay_vao = make_overlay_vertex_array(overlay_buffer);
+  }
+
+  ~Impl() {
+    glDeleteVertexArrays(1, &overlay_vao);
+    glDeleteBuffers(1, &overlay_buffer);
+    glDeleteProgram(overlay_program);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteProgram(program);
+    glDeleteFramebuffers(1, &framebuffer);
+    GLuint renderbuffers[] = {color, ids, depth};
+    glDeleteRenderbuffers(3, renderbuffers);
+  }
+
+  void create_framebuffer() {
+    color = make_renderbuffer(GL_RGBA8, settings.width, settings.height);
+    ids = make_renderbuffer(GL_R32UI, settings.width, settings.height);
+    depth = make_renderbuffer(GL_DEPTH_COMPONENT32F, settings.width, settings.height);
+    glCreateFramebuffers(1, &framebuffer);
+    glNamedFramebufferRenderbuffer(framebuffer, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color);
+    glNamedFramebufferRenderbuffer(framebuffer, GL_COLOR_ATTACHMENT1, GL_RENDERBUFFER, ids);
+    glNamedFramebufferRenderbuffer(framebuffer, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth);
+    GLenum status = glCheckNamedFramebufferStatus(framebuffer, GL_DRAW_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE) {
+      fail(kWhere, "offscreen framebuffer incomplete (status " + std::to_string(status) + ")");
+    }
+  }
+
+  // Binds the offscreen targets and the mesh program and clears colour, ids and depth. Sets
+  // every piece of GL state it relies on: overlays and the window code change some of it.
+  void begin_frame(const Camera& camera) {
+    const GLenum color_and_ids[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(framebuffer, 2, color_and_ids);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer);
+    glViewport(0, 0, settings.width, settings.height);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+    glDisable(GL_CULL_FACE);
+    std::array<float, 4> background = unpack_color(settings.background);
+    const GLuint no_object[4] = {kBackgroundId, 0, 0, 0};
+    const float far_depth = 1.0f;
+    glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, background.data());
+    glClearNamedFramebufferuiv(framebuffer, GL_COLOR, 1, no_object);
+    glClearNamedFramebufferfv(framebuffer, GL_DEPTH, 0, &far_depth);
+
+    glUseProgram(program);
+    glBindVertexArray(vao);
+    glProgramUniformMatrix4fv(program, render::kViewProjectionUniform, 1, GL_FALSE,
+                              glm::value_ptr(camera.view_projection()));
+    glProgramUniform3fv(program, render::kEyePositionUniform, 1, glm::value_ptr(camera.position));
+  }
+
+  void draw(const render::GpuMesh& mesh, const DrawItem& item) {
+    glVertexArrayVertexBuffer(vao, 0, mesh.buffer(), 0, GLsizei(mesh.stride()));
+    glVertexArrayElementBuffer(vao, mesh.buffer());
+    if (mesh.has_colors()) {
+      glEnableVertexArrayAttrib(vao, render::kColorAttribute);
+    } else {
+      // A disabled attribute reads its current generic value: the item's colour for every vertex.
+      glDisableVertexArrayAttrib(vao, render::kColorAttribute);
+      glVertexAttrib4Nub(render::kColorAttribute, item.color & 0xFF, item.color >> 8 & 0xFF,
+                         item.color >> 16 & 0xFF, item.color >> 24);
+    }
+    glProgramUniform1ui(program, render::kObjectIdUniform, item.object + 1);
+    glDrawElements(GL_TRIANGLES, GLsizei(mesh.index_count()), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(uintptr_t(mesh.index_offset())));
+  }
+
+  // Draws one item from the cache, asking the provider on a miss. Returns false if skipped.
+  bool draw_item(const DrawItem& item, const MeshProvider& provider, RenderStats& stats) {
+    const render::MeshKey key{item.object, item.lod};
+    const render::GpuMesh* resident = cache.find(key);
+    if (resident != nullptr) {
+      ++stats.gpu_hits;
+      draw(*resident, item);
+      stats.triangles += resident->index_count() / 3;
+      return true;
+    }
+    ++stats.gpu_misses;
+    const Mesh* mesh = provider(item);
+    if (mesh == nullptr) return false;
+    uint64_t bytes = render::GpuMesh::bytes_for(*mesh);
+    stats.uploaded_bytes += bytes;
+    stats.triangles += mesh->triangle_count();
+    if (bytes <= cache.budget()) {
+      draw(*cache.insert(key, *mesh), item);
+    } else {
+      draw(render::GpuMesh(*mesh), item);  // transient: deleted after the draw is queued
+    }
+    return true;
+  }
+
+  // Ascending (object, lod); stable so equal keys keep the caller's order.
+  const std::vector<const DrawItem*>& sorted(std::span<const DrawItem> items) {
+    order.clear();
+    for (const DrawItem& item : items) order.push_back(&item);
+    std::stable_sort(order.begin(), order.end(), [](const DrawItem* a, const DrawItem* b) {
+      return a->object != b->object ? a->object < b->object : a->lod < b->lod;
+    });
+    return order;
+  }
+
+  // Draws overlay vertices over the colour target only, on top of everything. The buffer is
+  // respecified per call (orphaned), so a draw still in flight keeps its old storage.
+  void draw_overlay(const std::vector<render::OverlayVertex>& vertices, GLenum mode,
+                    const Mat4& matrix) {
+    if (vertices.empty()) return;
+    glNamedBufferData(overlay_buffer, GLsizeiptr(vertices.size() * sizeof(render::OverlayVertex)),
+                      vertices.data(), GL_STREAM_DRAW);
+    const GLenum color_only[] = {GL_COLOR_ATTACHMENT0, GL_NONE};
+    glNamedFramebufferDrawBuffers(framebuffer, 2, color_only);
+    glBindFramebuffer(GL_DRAW_FRAMEBUFFER, framebuffer);
+    glViewport(0, 0, settings.width, settings.height);
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(overlay_program);
+    glBindVertexArray(overlay_vao);
+    glProgramUniformMatrix4fv(overlay_program, render::kOverlayMatrixUniform, 1, GL_FALSE,
+                              glm::value_ptr(matrix));
+    glDrawArrays(mode, 0, GLsizei(vertices.size()));
+  }
+
+  void read_attachment(GLenum attachment, GLenum format, GLenum type, void* out) const {
+    glNamedFramebufferReadBuffer(framebuffer, attachment);
+    glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    glReadPixels(0, 0, settings.width, settings.height, format, type, out);
+  }
+
+  RenderSettings settings;
+  render::GpuMeshCache cache;
+  GLuint color = 0, ids = 0, depth = 0, framebuffer = 0;
+  GLuint program = 0, vao = 0;
+  GLuint overlay_program = 0, overlay_vao = 0, overlay_buffer = 0;
+  std::vector<const DrawItem*> order;
+  std::vector<render::OverlayVertex> overlay_vertices;
+};
+
+Renderer::Renderer(const RenderSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
+
+Renderer::~Renderer() = default;
+
+RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> items,
+                             const MeshProvider& provider) {
+  auto start = std::chrono::steady_clock::now();
+  RenderStats stats;
+  impl_->begin_frame(camera);
+  const DrawItem* previous = nullptr;
+  for (const DrawItem* item : impl_->sorted(items)) {
+    if (!impl_->draw_item(*item, provider, stats)) continue;
+    if (previous == nullptr || previous->object != item->object) ++stats.objects;
+    previous = item;
+  }
+  glFinish();
+  stats.gpu_resident_bytes = impl_->cache.resident_bytes();
+  stats.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+                 .count();
+  return stats;
+}
+
+void Renderer::draw_lines(const Camera& camera, std::span<const LineSegment> segments) {
+  std::vector<render::OverlayVertex>& vertices = impl_->overlay_vertices;
+  vertices.clear();
+  for (const LineSegment& segment : segments) {
+    vertices.push_back({segment.a, segment.color});
+    vertices.push_back({segment.b, segment.color});
+  }
+  impl_->draw_overlay(vertices, GL_LINES, camera.view_projection());
+}
+
+void Renderer::draw_text(float x, float y, std::string_view text, Rgba8 color, float scale) {
+  std::vector<render::OverlayVertex>& vertices = impl_->overlay_vertices;
+  vertices.clear();
+  render::append_text(x, y, text, color, scale, vertices);
+  const RenderSettings& s = impl_->settings;
+  // Pixels, y down from the top-left corner, as stb_easy_font lays text out.
+  Mat4 pixels = glm::ortho(0.0f, float(s.width), float(s.height), 0.0f, -1.0f, 1.0f);
+  impl_->draw_overlay(vertices, GL_TRIANGLES, pixels);
+}
+
+Image Renderer::read_color() const {
+  Image image{impl_->settings.width, impl_->settings.height, {}};
+  image.rgba.resize(size_t(image.width) * image.height * 4);
+  impl_->read_attachment(GL_COLOR_ATTACHMENT0, GL_RGBA, GL_UNSIGNED_BYTE, image.rgba.data());
+  return image;
+}
+
+IdImage Renderer::read_ids() const {
+  IdImage image{impl_->settings.width, impl_->settings.height, {}};
+  image.ids.resize(size_t(image.width) * image.height);
+  impl_->read_attachment(GL_COLOR_ATTACHMENT1, GL_RED_INTEGER, GL_UNSIGNED_INT, image.ids.data());
+  return image;
+}
+
+void Renderer::present(int window_width, int window_height) const {
+  const RenderSettings& s = impl_->settings;
+  glNamedFramebufferReadBuffer(impl_->framebuffer, GL_COLOR_ATTACHMENT0);
+  bool same_size = window_width == s.width && window_height == s.height;
+  glBlitNamedFramebuffer(impl_->framebuffer, 0, 0, 0, s.width, s.height, 0, 0, window_width,
+                         window_height, GL_COLOR_BUFFER_BIT, same_size ? GL_NEAREST : GL_LINEAR);
+}
+
+const RenderSettings& Renderer::settings() const { return impl_->settings; }
+
+}  // namespace cellwalk

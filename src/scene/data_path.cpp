@@ -1,0 +1,16 @@
+// Where scripts/setup unpacks the project's meshes: $CELLWALK_DATA when set (an installed
+// binary, a CI cache), else the source tree's data/ folder this library was built from.
+#include <cstdlib>
+#include <string>
+
+#include "cellwalk/generators.hpp"
+
+namespace cellwalk {
+
+std::string data_path(const std::string& relative) {
+  const char* root = std::getenv("CELLWALK_DATA");
+  const std::string base = root && *root ? std::string(root) : std::string(CELLWALK_SOURCE_DIR) + "/data";
+  return base + "/" + relative;
+}
+
+}  // namespace cellwalk

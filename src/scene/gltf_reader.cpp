@@ -1,0 +1,377 @@
+// glTF 2.0 / GLB reader on tinygltf (syoyo/tinygltf): one object per mesh node of the default
+// scene, with the node hierarchy's transforms applied. tinygltf parses the JSON and resolves
+// buffers; everything it does not check is checked here: the GLB framing, that accessors lie
+// inside their buffer views and views inside their buffers, index ranges, node cycles.
+// Triangle primitives (lists, strips, fans) are read; points and lines are skipped.
+#define TINYGLTF_IMPLEMENTATION
+#define TINYGLTF_NO_STB_IMAGE
+#define TINYGLTF_NO_STB_IMAGE_WRITE
+#define TINYGLTF_NO_EXTERNAL_IMAGE
+#include <tiny_gltf.h>
+
+#include <cstring>
+#include <filesystem>
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+
+#include "cellwalk/error.hpp"
+#include "scene/readers.hpp"
+
+namespace cellwalk::detail {
+
+namespace {
+
+// --- loading -------------------------------------------------------------------------------
+
+uint32_t le32(Bytes b, size_t at) {
+  uint32_t v;
+  std::memcpy(&v, b.data() + at, 4);
+  return v;
+}
+
+// tinygltf trusts the GLB chunk lengths more than it should; check the framing first so a bad
+// file gets an error with its byte offset.
+void check_glb_framing(Bytes b, const std::string& name) {
+  auto fail_at = [&name](size_t at, const std::string& what) {
+    fail(name + "@" + std::to_string(at), what);
+  };
+  if (b.size() < 20) fail_at(0, "GLB file shorter than its 20-byte header");
+  if (le32(b, 4) != 2) fail_at(4, "GLB version " + std::to_string(le32(b, 4)) + " is not 2");
+  const uint64_t total = le32(b, 8);
+  if (total > b.size() || total < 20)
+    fail_at(8, "GLB length " + std::to_string(total) + " does not match the file size " +
+                   std::to_string(b.size()));
+  for (uint64_t at = 12, chunk = 0; at < total; ++chunk) {
+    if (total - at < 8) fail_at(at, "GLB chunk header runs past the end");
+    const uint64_t length = le32(b, at);
+    const uint32_t type = le32(b, at + 4);
+    if (length > total - at - 8)
+      fail_at(at, "GLB chunk length " + std::to_string(length) + " runs past the end");
+    if (chunk == 0 && type != 0x4E4F534Au) fail_at(at + 4, "first GLB chunk is not JSON");
+    at += 8 + length;
+  }
+}
+
+// Buffers are read from files only below `base_dir`, and only when it is set.
+struct FileAccess {
+  std::filesystem::path base_dir;
+  bool allows(const std::string& path) const {
+    if (base_dir.empty()) return false;
+    const auto rel = std::filesystem::path(path).lexically_normal().lexically_relative(base_dir);
+    return !rel.empty() && *rel.begin() != "..";
+  }
+};
+
+tinygltf::FsCallbacks file_callbacks(FileAccess& access) {
+  tinygltf::FsCallbacks fs;
+  fs.FileExists = [](const std::string& path, void* user) {
+    return static_cast<FileAccess*>(user)->allows(path) && std::filesystem::is_regular_file(path);
+  };
+  fs.ExpandFilePath = [](const std::string& path, void*) { return path; };
+  fs.ReadWholeFile = [](std::vector<unsigned char>* out, std::string* err,
+                        const std::string& path, void* user) {
+    if (!static_cast<FileAccess*>(user)->allows(path)) return false;
+    try {
+      *out = read_whole_file(path);
+      return true;
+    } catch (const Error& e) {
+      *err += e.what();
+      return false;
+    }
+  };
+  fs.WriteWholeFile = [](std::string*, const std::string&, const std::vector<unsigned char>&,
+                         void*) { return false; };
+  fs.user_data = &access;
+  return fs;
+}
+
+// Images are not needed: accept them without decoding.
+bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
+                  const unsigned char*, int, void*) {
+  return true;
+}
+
+std::string first_line(std::string s) {
+  s = s.substr(0, s.find('\n'));
+  return s.empty() ? "tinygltf could not parse the file" : s;
+}
+
+tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& base_dir) {
+  const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  if (glb) check_glb_framing(bytes, name);
+  if (bytes.size() > UINT32_MAX) fail(name, "file larger than 4 GiB");
+  FileAccess access{base_dir.empty() ? std::filesystem::path()
+                                     : std::filesystem::path(base_dir).lexically_normal()};
+  tinygltf::TinyGLTF loader;
+  loader.SetFsCallbacks(file_callbacks(access));
+  loader.SetImageLoader(ignore_image, nullptr);
+  tinygltf::Model model;
+  std::string err, warn;
+  bool ok = false;
+  try {
+    const auto size = static_cast<unsigned int>(bytes.size());
+    ok = glb ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), size, base_dir)
+             : loader.LoadASCIIFromString(&model, &err, &warn,
+                                          reinterpret_cast<const char*>(bytes.data()), size,
+                                          base_dir);
+  } catch (const std::exception& e) {  // tinygltf is third-party: keep its failures ours
+    fail(name, std::string("glTF parser failed: ") + e.what());
+  }
+  if (!ok) fail(name, first_line(err));
+  return model;
+}
+
+// --- accessors ------------------------------------------------------------------------------
+
+// A checked view of an accessor: element i, component c is at data + i * stride + c * size.
+struct AccessorView {
+  const uint8_t* data = nullptr;
+  size_t stride = 0;
+  size_t count = 0;
+  int components = 0;
+  int component_type = 0;
+  bool normalized = false;
+
+  double get(size_t i, int c) const {
+    const uint8_t* p = data + i * stride + c * tinygltf::GetComponentSizeInBytes(component_type);
+    auto as = [p]<typename T>(T) {
+      T v;
+      std::memcpy(&v, p, sizeof v);
+      return v;
+    };
+    switch (component_type) {
+      case TINYGLTF_COMPONENT_TYPE_BYTE: return scale(as(int8_t{}), 127.0);
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return scale(as(uint8_t{}), 255.0);
+      case TINYGLTF_COMPONENT_TYPE_SHORT: return scale(as(int16_t{}), 32767.0);
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return scale(as(uint16_t{}), 65535.0);
+      case TINYGLTF_COMPONENT_TYPE_INT: return as(int32_t{});
+      case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT: return as(uint32_t{});
+      case TINYGLTF_COMPONENT_TYPE_FLOAT: return as(float{});
+      case TINYGLTF_COMPONENT_TYPE_DOUBLE: return as(double{});
+    }
+    return 0.0;
+  }
+  Vec3 vec3(size_t i) const { return Vec3(get(i, 0), get(i, 1), get(i, 2)); }
+
+ private:
+  // Normalized integers map to [0, 1] or [-1, 1] (glTF 2.0 section 3.11).
+  double scale(double v, double max) const {
+    return normalized ? std::max(v / max, -1.0) : v;
+  }
+};
+
+AccessorView view_of(const tinygltf::Model& m, int index, const std::string& where) {
+  auto bad = [&where, index](const std::string& what) {
+    fail(where, "accessor " + std::to_string(index) + " " + what);
+  };
+  if (index < 0 || static_cast<size_t>(index) >= m.accessors.size()) bad("does not exist");
+  const tinygltf::Accessor& a = m.accessors[index];
+  if (a.sparse.isSparse) bad("is sparse, which is not supported");
+  AccessorView v;
+  v.count = a.count;
+  v.components = tinygltf::GetNumComponentsInType(a.type);
+  v.component_type = a.componentType;
+  v.normalized = a.normalized;
+  const int size = tinygltf::GetComponentSizeInBytes(a.componentType);
+  if (v.components <= 0 || v.components > 4 || size <= 0) bad("has an unusable type");
+  // Without a view an accessor is all zeros, useful only with sparse data, and its count
+  // would be bounded by nothing in the file.
+  if (a.bufferView < 0) bad("has no buffer view, which is not supported");
+  if (static_cast<size_t>(a.bufferView) >= m.bufferViews.size()) bad("names a missing view");
+  const tinygltf::BufferView& bv = m.bufferViews[a.bufferView];
+  if (bv.buffer < 0 || static_cast<size_t>(bv.buffer) >= m.buffers.size())
+    bad("uses a view of a missing buffer");
+  const size_t buffer_size = m.buffers[bv.buffer].data.size();
+  if (bv.byteOffset > buffer_size || bv.byteLength > buffer_size - bv.byteOffset)
+    bad("uses a view that runs past the end of its buffer");
+  const size_t element = static_cast<size_t>(v.components) * size;
+  v.stride = bv.byteStride ? bv.byteStride : element;
+  if (v.stride < element) bad("has a stride shorter than its element");
+  if (a.count > 0 && (a.byteOffset > bv.byteLength || bv.byteLength - a.byteOffset < element ||
+                      (a.count - 1) > (bv.byteLength - a.byteOffset - element) / v.stride))
+    bad("runs past the end of its buffer view");
+  v.data = m.buffers[bv.buffer].data.data() + bv.byteOffset + a.byteOffset;
+  return v;
+}
+
+// --- primitives and nodes ------------------------------------------------------------------
+
+// Triangle-list indices for `n` vertices of a list, strip or fan (glTF 2.0 section 3.7.2.1).
+std::vector<uint32_t> triangles(int mode, const std::vector<uint32_t>& v) {
+  if (mode == TINYGLTF_MODE_TRIANGLES) return {v.begin(), v.end() - v.size() % 3};
+  std::vector<uint32_t> out;
+  for (size_t i = 2; i < v.size(); ++i) {
+    if (mode == TINYGLTF_MODE_TRIANGLE_FAN) out.insert(out.end(), {v[0], v[i - 1], v[i]});
+    else if (i % 2 == 0) out.insert(out.end(), {v[i - 2], v[i - 1], v[i]});
+    else out.insert(out.end(), {v[i - 1], v[i - 2], v[i]});  // keeps strip winding
+  }
+  return out;
+}
+
+bool is_triangles(int mode) {
+  return mode == -1 || mode == TINYGLTF_MODE_TRIANGLES || mode == TINYGLTF_MODE_TRIANGLE_STRIP ||
+         mode == TINYGLTF_MODE_TRIANGLE_FAN;
+}
+
+int attribute(const tinygltf::Primitive& p, const char* name) {
+  auto it = p.attributes.find(name);
+  return it == p.attributes.end() ? -1 : it->second;
+}
+
+Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
+                    const std::string& where) {
+  Mesh mesh;
+  const AccessorView pos = view_of(m, attribute(p, "POSITION"), where);
+  if (pos.components != 3) fail(where, "POSITION is not a VEC3");
+  if (pos.count > UINT32_MAX) fail(where, "more than 2^32 vertices");
+  mesh.positions.resize(pos.count);
+  for (size_t i = 0; i < pos.count; ++i) mesh.positions[i] = pos.vec3(i);
+  if (int n = attribute(p, "NORMAL"); n >= 0) {
+    const AccessorView nv = view_of(m, n, where);
+    if (nv.components != 3 || nv.count != pos.count) fail(where, "NORMAL does not match POSITION");
+    mesh.normals.resize(nv.count);
+    for (size_t i = 0; i < nv.count; ++i) mesh.normals[i] = nv.vec3(i);
+  }
+  if (int c = attribute(p, "COLOR_0"); c >= 0) {
+    const AccessorView cv = view_of(m, c, where);
+    if (cv.components < 3 || cv.count != pos.count) fail(where, "COLOR_0 does not match POSITION");
+    auto ch = [&cv](size_t i, int k) {
+      const double v = k < cv.components ? cv.get(i, k) : 1.0;
+      return static_cast<uint8_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+    };
+    mesh.colors.resize(cv.count);
+    for (size_t i = 0; i < cv.count; ++i) mesh.colors[i] = rgba8(ch(i, 0), ch(i, 1), ch(i, 2), ch(i, 3));
+  }
+  std::vector<uint32_t> order;
+  if (p.indices >= 0) {
+    const AccessorView iv = view_of(m, p.indices, where);
+    if (iv.components != 1 || iv.normalized) fail(where, "indices are not plain scalars");
+    order.resize(iv.count);
+    for (size_t i = 0; i < iv.count; ++i) {
+      const double index = iv.get(i, 0);
+      if (!(index >= 0.0 && index < double(pos.count)))
+        fail(where, "index " + std::to_string(index) + " is out of range for " +
+                        std::to_string(pos.count) + " vertices");
+      order[i] = static_cast<uint32_t>(index);
+    }
+  } else {
+    order.resize(pos.count);
+    for (size_t i = 0; i < pos.count; ++i) order[i] = static_cast<uint32_t>(i);
+  }
+  mesh.indices = triangles(p.mode == -1 ? TINYGLTF_MODE_TRIANGLES : p.mode, order);
+  return mesh;
+}
+
+Rgba8 material_color(const tinygltf::Model& m, const tinygltf::Mesh& mesh) {
+  for (const tinygltf::Primitive& p : mesh.primitives) {
+    if (p.material < 0 || static_cast<size_t>(p.material) >= m.materials.size()) continue;
+    const std::vector<double>& f = m.materials[p.material].pbrMetallicRoughness.baseColorFactor;
+    if (f.size() != 4) continue;
+    auto ch = [&f](int k) { return static_cast<uint8_t>(std::clamp(f[k], 0.0, 1.0) * 255.0 + 0.5); };
+    return rgba8(ch(0), ch(1), ch(2), ch(3));
+  }
+  return Object{}.color;
+}
+
+Mat4 local_matrix(const tinygltf::Node& n, const std::string& where) {
+  if (n.matrix.size() == 16) {
+    Mat4 m;
+    for (int i = 0; i < 16; ++i) glm::value_ptr(m)[i] = static_cast<float>(n.matrix[i]);
+    return m;
+  }
+  if (!n.matrix.empty() || (!n.translation.empty() && n.translation.size() != 3) ||
+      (!n.rotation.empty() && n.rotation.size() != 4) || (!n.scale.empty() && n.scale.size() != 3))
+    fail(where, "malformed transform");
+  Mat4 m(1.0f);
+  if (!n.translation.empty())
+    m = glm::translate(m, Vec3(n.translation[0], n.translation[1], n.translation[2]));
+  if (!n.rotation.empty())  // glTF stores x y z w; glm's constructor takes w first
+    m *= glm::mat4_cast(glm::quat(float(n.rotation[3]), float(n.rotation[0]),
+                                  float(n.rotation[1]), float(n.rotation[2])));
+  if (!n.scale.empty()) m = glm::scale(m, Vec3(n.scale[0], n.scale[1], n.scale[2]));
+  return m;
+}
+
+// A mirroring transform turns counter-clockwise triangles clockwise; swap two corners back.
+void keep_winding(Mesh& mesh, const Mat4& m) {
+  if (glm::determinant(glm::mat3(m)) >= 0.0f) return;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+}
+
+std::string stem_of(const std::string& name) { return std::filesystem::path(name).stem().string(); }
+
+// The node's object, or one without triangles when its mesh has none.
+Object object_of_node(const tinygltf::Model& m, int node_index, const Mat4& world,
+                      const std::string& name) {
+  const tinygltf::Node& node = m.nodes[node_index];
+  const std::string where = name + ": node " + std::to_string(node_index);
+  if (static_cast<size_t>(node.mesh) >= m.meshes.size()) fail(where, "names a missing mesh");
+  const tinygltf::Mesh& gm = m.meshes[node.mesh];
+  Object object;
+  object.name = !node.name.empty() ? node.name
+                : !gm.name.empty() ? gm.name
+                                   : stem_of(name) + "#" + std::to_string(node_index);
+  object.color = material_color(m, gm);
+  for (size_t k = 0; k < gm.primitives.size(); ++k)
+    if (is_triangles(gm.primitives[k].mode))
+      append(object.mesh, read_primitive(m, gm.primitives[k],
+                                         where + " mesh " + std::to_string(node.mesh) +
+                                             " primitive " + std::to_string(k)));
+  transform(object.mesh, world);
+  keep_winding(object.mesh, world);
+  return object;
+}
+
+// The roots to walk: the default scene's (else the first scene's), else every node that is
+// no other node's child.
+std::vector<int> root_nodes(const tinygltf::Model& m) {
+  if (!m.scenes.empty()) {
+    const bool valid = m.defaultScene >= 0 && static_cast<size_t>(m.defaultScene) < m.scenes.size();
+    return m.scenes[valid ? m.defaultScene : 0].nodes;
+  }
+  std::vector<bool> child(m.nodes.size(), false);
+  for (const tinygltf::Node& n : m.nodes)
+    for (int c : n.children)
+      if (c >= 0 && static_cast<size_t>(c) < child.size()) child[c] = true;
+  std::vector<int> roots;
+  for (size_t i = 0; i < child.size(); ++i)
+    if (!child[i]) roots.push_back(static_cast<int>(i));
+  return roots;
+}
+
+}  // namespace
+
+std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
+                              const std::string& base_dir) {
+  const tinygltf::Model m = load(bytes, name, base_dir);
+  std::vector<Object> objects;
+  // Depth-first with an explicit stack: a deep or cyclic node graph must neither overflow the
+  // call stack nor loop; each node is visited once (glTF nodes form disjoint trees).
+  std::vector<bool> visited(m.nodes.size(), false);
+  std::vector<std::pair<int, Mat4>> stack;
+  for (int r : root_nodes(m)) stack.emplace_back(r, Mat4(1.0f));
+  std::reverse(stack.begin(), stack.end());
+  while (!stack.empty()) {
+    auto [index, parent] = stack.back();
+    stack.pop_back();
+    if (index < 0 || static_cast<size_t>(index) >= m.nodes.size())
+      fail(name, "node " + std::to_string(index) + " does not exist");
+    if (visited[index]) fail(name, "node " + std::to_string(index) + " is reached twice (cycle)");
+    visited[index] = true;
+    const tinygltf::Node& node = m.nodes[index];
+    const Mat4 world = parent * local_matrix(node, name + ": node " + std::to_string(index));
+    if (node.mesh >= 0) {
+      Object object = object_of_node(m, index, world, name);
+      if (object.mesh.triangle_count() > 0) {
+        object.id = first_id + static_cast<ObjectId>(objects.size());
+        finish_object(object, name + ": node " + std::to_string(index));
+        objects.push_back(std::move(object));
+      }
+    }
+    for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
+  }
+  return objects;
+}
+
+}  // namespace cellwalk::detail

@@ -1,0 +1,98 @@
+// Model import: format detection, reading files with clear errors, and the dispatch from
+// parse_model to the per-format readers (off_reader.cpp, ply_reader.cpp, obj_reader.cpp,
+// gltf_reader.cpp), plus the steps every reader shares.
+#include "cellwalk/import.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+#include "cellwalk/error.hpp"
+#include "scene/readers.hpp"
+
+namespace cellwalk {
+
+namespace detail {
+
+std::vector<uint8_t> read_whole_file(const std::string& path) {
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) fail(path, "no such file");
+  if (std::filesystem::is_directory(status)) fail(path, "is a directory, not a model file");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  const uint64_t size = std::filesystem::file_size(path, ec);
+  if (ec) fail(path, "cannot get the size: " + ec.message());
+  if (size == 0) fail(path, "is empty");
+  if (size > kMaxModelBytes)
+    fail(path, "is " + std::to_string(size) + " bytes; models over " +
+                   std::to_string(kMaxModelBytes) + " bytes are not read (split it)");
+  std::vector<uint8_t> bytes(size);
+  if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
+    fail(path, "read failed after " + std::to_string(in.gcount()) + " bytes");
+  return bytes;
+}
+
+void finish_object(Object& object, const std::string& name) {
+  validate(object.mesh, name);
+  if (object.mesh.normals.empty()) compute_normals(object.mesh);
+  object.bounds = bounds_of(object.mesh);
+}
+
+void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon) {
+  for (size_t i = 2; i < polygon.size(); ++i)
+    indices.insert(indices.end(), {polygon[0], polygon[i - 1], polygon[i]});
+}
+
+}  // namespace detail
+
+namespace {
+
+std::vector<Object> parse(ModelFormat format, std::span<const uint8_t> bytes,
+                          const std::string& name, ObjectId first_id,
+                          const std::string& base_dir) {
+  if (bytes.empty()) fail(name, "is empty");
+  if (format == ModelFormat::kGltf) return detail::read_gltf(bytes, name, first_id, base_dir);
+  Object object = format == ModelFormat::kOff   ? detail::read_off(bytes, name)
+                  : format == ModelFormat::kPly ? detail::read_ply(bytes, name)
+                                                : detail::read_obj(bytes, name);
+  object.id = first_id;
+  object.name = std::filesystem::path(name).stem().string();
+  detail::finish_object(object, name);
+  std::vector<Object> objects;
+  objects.push_back(std::move(object));
+  return objects;
+}
+
+}  // namespace
+
+ModelFormat format_of(const std::string& file) {
+  std::string ext = std::filesystem::path(file).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".obj") return ModelFormat::kObj;
+  if (ext == ".ply") return ModelFormat::kPly;
+  if (ext == ".off") return ModelFormat::kOff;
+  if (ext == ".gltf" || ext == ".glb") return ModelFormat::kGltf;
+  fail(file, "unknown model format '" + ext + "'; expected .obj, .ply, .off, .gltf or .glb");
+}
+
+std::vector<Object> parse_model(ModelFormat format, std::span<const uint8_t> bytes,
+                                const std::string& name, ObjectId first_id) {
+  return parse(format, bytes, name, first_id, "");
+}
+
+std::vector<Object> import_model(const std::string& file, ObjectId first_id) {
+  const ModelFormat format = format_of(file);
+  const std::vector<uint8_t> bytes = detail::read_whole_file(file);
+  // Only a .gltf beside its .bin buffers may read other files.
+  const std::string base_dir =
+      format == ModelFormat::kGltf
+          ? std::filesystem::absolute(file).parent_path().lexically_normal().string()
+          : "";
+  return parse(format, bytes, file, first_id, base_dir);
+}
+
+}  // namespace cellwalk

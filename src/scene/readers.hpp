@@ -1,0 +1,82 @@
+// The per-format model readers behind parse_model (import.cpp), and the cursors they share.
+// Each reader checks every count against the bytes left before allocating, every index
+// against the vertices read, and ends with validate(); errors are one line:
+// "<name>:<line>: <problem>" for text and "<name>@<byte offset>: <problem>" for binary.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cellwalk/mesh.hpp"
+
+namespace cellwalk::detail {
+
+using Bytes = std::span<const uint8_t>;
+
+// Single-object formats return the object unfinished: positions, indices and whatever
+// normals/colours the file had; finish_object() (import.cpp) does the rest.
+Object read_off(Bytes bytes, const std::string& name);
+Object read_ply(Bytes bytes, const std::string& name);
+Object read_obj(Bytes bytes, const std::string& name);
+
+// One finished object per mesh node, ids from first_id. External buffers ("x.bin") are read
+// from `base_dir` only when it is not empty; parsing from memory never touches the disk.
+std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
+                              const std::string& base_dir);
+
+// The bytes of a file; an Error names it when it is a directory, empty, unreadable or larger
+// than kMaxModelBytes.
+constexpr uint64_t kMaxModelBytes = uint64_t(2) << 30;
+std::vector<uint8_t> read_whole_file(const std::string& path);
+
+// Validates the mesh, computes normals when absent and sets the bounds.
+void finish_object(Object& object, const std::string& name);
+
+// Appends the fan (v0, v[i], v[i+1]) of a convex polygon, the triangulation every polygon
+// format here uses. REQUIRES: polygon.size() >= 3.
+void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon);
+
+// Walks a text model by tokens, counting lines for error messages. `comment` starts a comment
+// that runs to the end of the line ('\0': the format has none).
+class TextCursor {
+ public:
+  TextCursor(Bytes bytes, std::string name, char comment);
+
+  // The next token, across line ends and comments; empty at the end of the input.
+  std::string_view token();
+  // The next token on the current line; empty at the line's end (the newline is not consumed).
+  std::string_view token_in_line();
+  // Skips the rest of the current line, including its newline.
+  void next_line();
+  // The rest of the current line without its newline (for header lines such as PLY's).
+  std::string_view rest_of_line();
+
+  bool at_end() const { return pos_ >= text_.size(); }
+  size_t offset() const { return pos_; }
+  size_t remaining() const { return text_.size() - pos_; }
+  size_t line() const { return line_; }
+
+  // Converters that fail with this cursor's position when the token is not what is asked.
+  double to_double(std::string_view token, std::string_view what) const;
+  int64_t to_int(std::string_view token, std::string_view what) const;
+  // A count the rest of the input must be able to hold: count * min_bytes_each <= remaining().
+  uint64_t to_count(std::string_view token, std::string_view what, size_t min_bytes_each) const;
+
+  // "<name>:<line>"
+  std::string where() const;
+  [[noreturn]] void fail(std::string_view what) const;
+
+ private:
+  void skip_blanks_in_line();
+
+  std::string_view text_;
+  std::string name_;
+  char comment_;
+  size_t pos_ = 0;
+  size_t line_ = 1;
+};
+
+}  // namespace cellwalk::detail

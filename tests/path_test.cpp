@@ -1,0 +1,132 @@
+#include "cellwalk/path.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "cellwalk/error.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+// A 3×3 street grid, 40 m blocks, eye height 1.7 m.
+NavGraph grid_streets() {
+  NavGraph g;
+  for (int z = 0; z < 3; ++z)
+    for (int x = 0; x < 3; ++x) g.nodes.push_back(Vec3(40.0f * x, 1.7f, 40.0f * z));
+  for (uint32_t z = 0; z < 3; ++z)
+    for (uint32_t x = 0; x < 3; ++x) {
+      if (x < 2) g.edges.push_back({z * 3 + x, z * 3 + x + 1});
+      if (z < 2) g.edges.push_back({z * 3 + x, (z + 1) * 3 + x});
+    }
+  return g;
+}
+
+float distance_to_graph(const NavGraph& g, const Vec3& p) {
+  float best = 1e30f;
+  for (auto [a, b] : g.edges) {
+    Vec3 A = g.nodes[a], B = g.nodes[b];
+    float t = std::clamp(glm::dot(p - A, B - A) / glm::dot(B - A, B - A), 0.0f, 1.0f);
+    best = std::min(best, glm::distance(p, A + t * (B - A)));
+  }
+  return best;
+}
+
+TEST(Path, EveryKindStaysOnTheGraphAndIsDeterministic) {
+  const NavGraph g = grid_streets();
+  for (const char* kind : {"normal", "slow", "fast", "turning", "backward", "back-and-forth", "random"}) {
+    PathParams p;
+    p.kind = parse_session_kind(kind);
+    p.frames = 900;
+    p.seed = 5;
+    CameraPath a = generate_path(g, p), b = generate_path(g, p);
+    ASSERT_EQ(a.frames.size(), 900u) << kind;
+    for (size_t i = 0; i < a.frames.size(); ++i) {
+      ASSERT_LT(distance_to_graph(g, a.frames[i].position), 1e-3f) << kind << " frame " << i;
+      ASSERT_EQ(a.frames[i].position, b.frames[i].position) << kind;
+      ASSERT_EQ(a.frames[i].yaw_deg, b.frames[i].yaw_deg) << kind;
+    }
+  }
+}
+
+TEST(Path, KindsMoveAtTheirSpeeds) {
+  const NavGraph g = grid_streets();
+  auto travelled = [&](const char* kind) {
+    PathParams p;
+    p.kind = parse_session_kind(kind);
+    p.frames = 300;
+    CameraPath path = generate_path(g, p);
+    double d = 0;
+    for (size_t i = 1; i < path.frames.size(); ++i)
+      d += glm::distance(path.frames[i].position, path.frames[i - 1].position);
+    return d;
+  };
+  EXPECT_GT(travelled("fast"), 3.5 * travelled("normal"));
+  EXPECT_GT(travelled("normal"), 2 * travelled("slow"));
+}
+
+TEST(Path, BackwardLooksAgainstTheDirectionOfTravel) {
+  PathParams p;
+  p.kind = SessionKind::kBackward;
+  p.frames = 200;
+  CameraPath path = generate_path(grid_streets(), p);
+  Camera c;
+  int against = 0;
+  for (size_t i = 1; i < path.frames.size(); ++i) {
+    apply(path.frames[i], c);
+    Vec3 move = path.frames[i].position - path.frames[i - 1].position;
+    if (glm::length(move) > 0 && glm::dot(c.forward(), move) < 0) ++against;
+  }
+  EXPECT_GT(against, 150);
+}
+
+TEST(Path, WritesAndReadsBack) {
+  test::TempDir dir;
+  PathParams p;
+  p.kind = SessionKind::kTurning;
+  p.frames = 50;
+  CameraPath path = generate_path(grid_streets(), p);
+  write_path(path, dir.file("p.txt"));
+  CameraPath back = read_path(dir.file("p.txt"));
+  ASSERT_EQ(back.frames.size(), path.frames.size());
+  for (size_t i = 0; i < path.frames.size(); ++i) {
+    EXPECT_NEAR(glm::distance(back.frames[i].position, path.frames[i].position), 0.0f, 1e-4f);
+    EXPECT_NEAR(back.frames[i].yaw_deg, path.frames[i].yaw_deg, 1e-4f);
+    EXPECT_NEAR(back.frames[i].time, path.frames[i].time, 1e-6);
+  }
+}
+
+TEST(Path, MalformedFilesGiveErrorsNamingTheLine) {
+  test::TempDir dir;
+  struct Case {
+    const char* text;
+    const char* expect;
+  } cases[] = {
+      {"", "empty"},
+      {"hello\n", ":1"},
+      {"# cellwalk path 1\n0 1 2 3 4\n", ":2: expected 6 numbers"},
+      {"# cellwalk path 1\n0 1 2 3 4 5 6\n", ":2: unexpected text"},
+      {"# cellwalk path 1\n1 0 0 0 0 0\n0 0 0 0 0 0\n", ":3: time goes backwards"},
+      {"# cellwalk path 1\n0 nan 0 0 0 0\n", ":2"},
+      {"# cellwalk path 1\n# only comments\n", "no frames"},
+  };
+  for (const Case& c : cases) {
+    std::ofstream(dir.file("bad.txt"), std::ios::trunc) << c.text;
+    try {
+      read_path(dir.file("bad.txt"));
+      ADD_FAILURE() << "accepted: " << c.text;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(c.expect), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(read_path(dir.file("missing.txt")), Error);
+}
+
+TEST(Path, UnknownKindAndEmptyGraphAreErrors) {
+  EXPECT_THROW(parse_session_kind("sideways"), Error);
+  EXPECT_THROW(generate_path(NavGraph{}, PathParams{}), Error);
+}
+
+}  // namespace
+}  // namespace cellwalk

@@ -1,0 +1,424 @@
+// Tests of the OpenGL renderer on the headless EGL context (llvmpipe): ids and depth, the
+// subset property the fidelity harness relies on, the GPU budget, skipping, determinism, and
+// PNG output.
+#include "cellwalk/renderer.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <set>
+
+#include <unistd.h>
+
+#include <epoxy/gl.h>
+
+#include "cellwalk/error.hpp"
+#include "render/gpu_mesh_cache.hpp"
+#include "test_support.hpp"
+
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+namespace cellwalk {
+namespace {
+
+constexpr int kWidth = 160;
+constexpr int kHeight = 120;
+
+// A box with flat-shaded faces (24 vertices, 12 triangles), optionally cut into n×n quads per
+// face so meshes of different sizes can be made.
+Mesh make_box(const Vec3& center, const Vec3& half, int n = 1) {
+  Mesh mesh;
+  for (int axis = 0; axis < 3; ++axis) {
+    for (float sign : {-1.0f, 1.0f}) {
+      Vec3 normal(0.0f);
+      normal[axis] = sign;
+      Vec3 u(0.0f), v(0.0f);
+      u[(axis + 1) % 3] = 1.0f;
+      v[(axis + 2) % 3] = 1.0f;
+      uint32_t base = uint32_t(mesh.positions.size());
+      for (int j = 0; j <= n; ++j) {
+        for (int i = 0; i <= n; ++i) {
+          Vec3 p = normal + u * (2.0f * i / n - 1.0f) + v * (2.0f * j / n - 1.0f);
+          mesh.positions.push_back(center + p * half);
+          mesh.normals.push_back(normal);
+        }
+      }
+      for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+          uint32_t a = base + j * (n + 1) + i, b = a + 1, c = a + n + 1, d = c + 1;
+          mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+        }
+      }
+    }
+  }
+  return mesh;
+}
+
+// Looking down -Z from z = 10 at the origin.
+Camera test_camera() {
+  Camera camera;
+  camera.position = Vec3(0.0f, 0.0f, 10.0f);
+  camera.aspect = float(kWidth) / kHeight;
+  camera.near_plane = 0.1f;
+  camera.far_plane = 100.0f;
+  return camera;
+}
+
+// Meshes by (object, lod), served by pointer as the renderer's provider expects.
+class Meshes {
+ public:
+  void add(ObjectId object, Mesh mesh, uint32_t lod = 0) { meshes_[{object, lod}] = std::move(mesh); }
+  MeshProvider provider() {
+    return [this](const DrawItem& item) -> const Mesh* {
+      ++calls_;
+      auto it = meshes_.find({item.object, item.lod});
+      return it == meshes_.end() ? nullptr : &it->second;
+    };
+  }
+  int calls() const { return calls_; }
+
+ private:
+  std::map<std::pair<ObjectId, uint32_t>, Mesh> meshes_;
+  int calls_ = 0;
+};
+
+uint32_t id_at(const IdImage& image, int x, int y) { return image.ids[size_t(y) * image.width + x]; }
+
+class RendererTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() { context_ = GlContext::headless(); }
+  static void TearDownTestSuite() { context_.reset(); }
+
+  static RenderSettings settings(uint64_t budget = 64ull << 20) {
+    RenderSettings s;
+    s.width = kWidth;
+    s.height = kHeight;
+    s.gpu_budget_bytes = budget;
+    return s;
+  }
+
+  static inline std::unique_ptr<GlContext> context_;
+};
+
+TEST_F(RendererTest, ContextIsOpenGl45OnMesa) {
+  EXPECT_FALSE(context_->renderer_name().empty());
+}
+
+TEST_F(RendererTest, BoxInFrontOfTheCameraFillsTheCentreWithItsId) {
+  Meshes meshes;
+  meshes.add(7, make_box(Vec3(0.0f), Vec3(1.0f)));
+  Renderer renderer(settings());
+  std::vector<DrawItem> items{{7, 0, rgba8(255, 0, 0)}};
+  RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+
+  IdImage ids = renderer.read_ids();
+  EXPECT_EQ(id_at(ids, kWidth / 2, kHeight / 2), 8u);
+  for (auto [x, y] : {std::pair{0, 0}, {kWidth - 1, 0}, {0, kHeight - 1}, {kWidth - 1, kHeight - 1}}) {
+    EXPECT_EQ(id_at(ids, x, y), kBackgroundId);
+  }
+  Image color = renderer.read_color();
+  const uint8_t* centre = &color.rgba[(size_t(kHeight / 2) * kWidth + kWidth / 2) * 4];
+  EXPECT_GT(centre[0], 0);  // red, lit: the front face gets ambient plus some diffuse
+  EXPECT_EQ(centre[1], 0);
+  const uint8_t* corner = &color.rgba[0];
+  RenderSettings s = settings();
+  EXPECT_EQ(corner[0], s.background & 0xFF);
+  EXPECT_EQ(corner[1], s.background >> 8 & 0xFF);
+  EXPECT_EQ(stats.triangles, 12u);
+  EXPECT_EQ(stats.objects, 1u);
+  EXPECT_EQ(stats.gpu_misses, 1u);
+  EXPECT_GT(stats.ms, 0.0);
+}
+
+TEST_F(RendererTest, NearerObjectWinsTheIdWhateverTheOrder) {
+  Meshes meshes;
+  meshes.add(1, make_box(Vec3(0.0f, 0.0f, 2.0f), Vec3(0.5f)));  // near
+  meshes.add(2, make_box(Vec3(0.0f, 0.0f, -3.0f), Vec3(2.0f)));  // far, larger
+  meshes.add(3, make_box(Vec3(0.0f, 0.0f, 4.0f), Vec3(0.2f)));   // nearest, small
+  Renderer renderer(settings());
+  for (std::vector<DrawItem> items : {std::vector<DrawItem>{{1}, {2}}, {{2}, {1}}}) {
+    renderer.render(test_camera(), items, meshes.provider());
+    EXPECT_EQ(id_at(renderer.read_ids(), kWidth / 2, kHeight / 2), 2u);
+  }
+  std::vector<DrawItem> all{{3}, {2}, {1}};
+  renderer.render(test_camera(), all, meshes.provider());
+  EXPECT_EQ(id_at(renderer.read_ids(), kWidth / 2, kHeight / 2), 4u);
+}
+
+// Random overlapping boxes of various tessellations, ids 0..count-1.
+Meshes random_scene(int count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> position(-4.0f, 4.0f), size(0.3f, 1.5f);
+  std::uniform_int_distribution<int> tessellation(1, 6);
+  Meshes meshes;
+  for (int i = 0; i < count; ++i) {
+    Vec3 center(position(rng), position(rng) * 0.7f, position(rng));
+    meshes.add(ObjectId(i), make_box(center, Vec3(size(rng), size(rng), size(rng)), tessellation(rng)));
+  }
+  return meshes;
+}
+
+std::vector<DrawItem> items_for(int count) {
+  std::vector<DrawItem> items;
+  for (int i = 0; i < count; ++i) {
+    items.push_back({ObjectId(i), 0, rgba8(uint8_t(40 + 7 * i), uint8_t(200 - 5 * i), 90)});
+  }
+  return items;
+}
+
+TEST_F(RendererTest, SubsetRendersItsObjectsPixelsExactlyAsTheFullList) {
+  constexpr int kCount = 24;
+  Meshes meshes = random_scene(kCount, 11);
+  Renderer renderer(settings());
+  std::vector<DrawItem> full = items_for(kCount);
+  renderer.render(test_camera(), full, meshes.provider());
+  Image full_color = renderer.read_color();
+  IdImage full_ids = renderer.read_ids();
+
+  std::vector<DrawItem> subset;
+  std::set<uint32_t> subset_ids;
+  for (int i = kCount - 1; i >= 0; i -= 2) {  // every other object, in reverse order
+    subset.push_back(full[i]);
+    subset_ids.insert(full[i].object + 1);
+  }
+  renderer.render(test_camera(), subset, meshes.provider());
+  Image color = renderer.read_color();
+  IdImage ids = renderer.read_ids();
+
+  int compared = 0;
+  for (size_t p = 0; p < full_ids.ids.size(); ++p) {
+    if (!subset_ids.count(full_ids.ids[p])) continue;
+    ++compared;
+    ASSERT_EQ(ids.ids[p], full_ids.ids[p]) << "pixel " << p;
+    ASSERT_EQ(std::memcmp(&color.rgba[p * 4], &full_color.rgba[p * 4], 4), 0) << "pixel " << p;
+  }
+  EXPECT_GT(compared, 1000);
+}
+
+TEST_F(RendererTest, TinyBudgetIsNeverExceededAndRendersTheSameImage) {
+  constexpr int kCount = 40;
+  Meshes meshes = random_scene(kCount, 5);
+  std::vector<DrawItem> items = items_for(kCount);
+  Renderer unbounded(settings());
+  unbounded.render(test_camera(), items, meshes.provider());
+  Image expected_color = unbounded.read_color();
+  IdImage expected_ids = unbounded.read_ids();
+
+  // Room for a few of the meshes only: every frame evicts, some meshes exceed it entirely.
+  const uint64_t budget = 8 * 1024;
+  Renderer bounded(settings(budget));
+  for (int frame = 0; frame < 3; ++frame) {
+    RenderStats stats = bounded.render(test_camera(), items, meshes.provider());
+    EXPECT_LE(stats.gpu_resident_bytes, budget);
+    EXPECT_GT(stats.gpu_misses, 0u);
+    EXPECT_GT(stats.uploaded_bytes, budget);
+    EXPECT_EQ(bounded.read_color().rgba, expected_color.rgba);
+    EXPECT_EQ(bounded.read_ids().ids, expected_ids.ids);
+  }
+  EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+  if (const char* dir = std::getenv("CELLWALK_TEST_IMAGES")) {
+    write_png(expected_color, std::string(dir) + "/renderer_random_scene.png");
+  }
+}
+
+TEST_F(RendererTest, CacheStaysUnderBudgetAndEvictsLeastRecentlyUsed) {
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> tessellation(1, 8);
+  const uint64_t budget = 40 * 1024;
+  render::GpuMeshCache cache(budget);
+  std::map<ObjectId, Mesh> meshes;
+  for (ObjectId id = 0; id < 200; ++id) {
+    Mesh mesh = make_box(Vec3(0.0f), Vec3(1.0f), tessellation(rng));
+    ASSERT_LE(render::GpuMesh::bytes_for(mesh), budget);
+    render::MeshKey key{id % 50, id / 50};
+    if (cache.find(key) == nullptr) cache.insert(key, mesh);
+    ASSERT_LE(cache.resident_bytes(), budget);
+  }
+  // Recently inserted keys are resident; keeping one in use protects it from eviction.
+  render::MeshKey kept{49, 3};
+  ASSERT_NE(cache.find(kept), nullptr);
+  for (ObjectId id = 1000; id < 1040; ++id) {
+    cache.insert({id, 0}, make_box(Vec3(0.0f), Vec3(1.0f), 2));
+    ASSERT_NE(cache.find(kept), nullptr);
+    ASSERT_LE(cache.resident_bytes(), budget);
+  }
+  EXPECT_EQ(cache.find({0, 0}), nullptr);
+}
+
+TEST_F(RendererTest, MeshLargerThanTheBudgetIsDrawnButNotKept) {
+  Meshes meshes;
+  meshes.add(0, make_box(Vec3(0.0f), Vec3(1.0f), 8));
+  std::vector<DrawItem> items{{0}};
+  Renderer renderer(settings(1024));
+  RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.gpu_resident_bytes, 0u);
+  EXPECT_EQ(stats.triangles, 6u * 8 * 8 * 2);
+  EXPECT_EQ(id_at(renderer.read_ids(), kWidth / 2, kHeight / 2), 1u);
+  stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.gpu_misses, 1u);
+}
+
+TEST_F(RendererTest, ProviderReturningNullSkipsTheItemUntilItsDataIsReady) {
+  Meshes meshes;
+  meshes.add(1, make_box(Vec3(-2.0f, 0.0f, 0.0f), Vec3(1.0f)));
+  Mesh late = make_box(Vec3(2.0f, 0.0f, 0.0f), Vec3(1.0f));
+  std::vector<DrawItem> items{{1}, {2}};
+  Renderer renderer(settings());
+  RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.objects, 1u);
+  EXPECT_EQ(stats.triangles, 12u);
+  IdImage ids = renderer.read_ids();
+  EXPECT_EQ(std::count(ids.ids.begin(), ids.ids.end(), 3u), 0);
+  EXPECT_GT(std::count(ids.ids.begin(), ids.ids.end(), 2u), 0);
+
+  meshes.add(2, late);  // the data arrives: the next frame draws it
+  stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.objects, 2u);
+  EXPECT_EQ(stats.gpu_hits, 1u);
+  EXPECT_EQ(stats.gpu_misses, 1u);
+  ids = renderer.read_ids();
+  EXPECT_GT(std::count(ids.ids.begin(), ids.ids.end(), 3u), 0);
+}
+
+TEST_F(RendererTest, RenderingIsDeterministic) {
+  Meshes meshes = random_scene(16, 9);
+  std::vector<DrawItem> items = items_for(16);
+  Renderer first(settings());
+  first.render(test_camera(), items, meshes.provider());
+  Image color = first.read_color();
+  IdImage ids = first.read_ids();
+  first.render(test_camera(), items, meshes.provider());  // from the cache this time
+  EXPECT_EQ(first.read_color().rgba, color.rgba);
+  EXPECT_EQ(first.read_ids().ids, ids.ids);
+  Renderer second(settings());
+  second.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(second.read_color().rgba, color.rgba);
+  EXPECT_EQ(second.read_ids().ids, ids.ids);
+  EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+}
+
+size_t changed_pixels(const Image& a, const Image& b, int x0, int y0, int x1, int y1) {
+  size_t changed = 0;
+  for (int y = y0; y < y1; ++y) {
+    for (int x = x0; x < x1; ++x) {
+      size_t p = (size_t(y) * a.width + x) * 4;
+      changed += std::memcmp(&a.rgba[p], &b.rgba[p], 4) != 0;
+    }
+  }
+  return changed;
+}
+
+TEST_F(RendererTest, LinesAreDrawnOverTheImageAndLeaveIdsAlone) {
+  Meshes meshes;
+  meshes.add(0, make_box(Vec3(0.0f), Vec3(1.0f)));
+  std::vector<DrawItem> items{{0}};
+  Renderer renderer(settings());
+  renderer.render(test_camera(), items, meshes.provider());
+  Image before = renderer.read_color();
+  IdImage ids = renderer.read_ids();
+  // A horizontal line through the centre, in front of and beyond the box.
+  std::vector<LineSegment> segments{{Vec3(-20.0f, 0.0f, 0.0f), Vec3(20.0f, 0.0f, 0.0f),
+                                     rgba8(255, 0, 255)}};
+  renderer.draw_lines(test_camera(), segments);
+  Image after = renderer.read_color();
+  EXPECT_EQ(renderer.read_ids().ids, ids.ids);
+  int centre_row = kHeight / 2;
+  EXPECT_GT(changed_pixels(before, after, 0, centre_row - 1, kWidth, centre_row + 1), size_t(kWidth) * 9 / 10);
+  EXPECT_EQ(changed_pixels(before, after, 0, 0, kWidth, centre_row - 2), 0u);
+  EXPECT_EQ(changed_pixels(before, after, 0, centre_row + 2, kWidth, kHeight), 0u);
+  // The next frame starts clean.
+  renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(renderer.read_color().rgba, before.rgba);
+}
+
+TEST_F(RendererTest, TextIsDrawnAtItsTopLeftCorner) {
+  std::vector<DrawItem> none;
+  Renderer renderer(settings());
+  renderer.render(test_camera(), none, Meshes().provider());
+  Image before = renderer.read_color();
+  renderer.draw_text(10.0f, 20.0f, "cellwalk 42", rgba8(255, 255, 255), 2.0f);
+  Image after = renderer.read_color();
+  // Image rows are bottom-up: text 20..~36 px from the top is in rows height-36..height-20.
+  int top = kHeight - 20, bottom = kHeight - 20 - 2 * 12;
+  EXPECT_GT(changed_pixels(before, after, 10, bottom, kWidth, top), 100u);
+  EXPECT_EQ(changed_pixels(before, after, 0, 0, kWidth, bottom), 0u);
+  EXPECT_EQ(changed_pixels(before, after, 0, top, kWidth, kHeight), 0u);
+  EXPECT_EQ(changed_pixels(before, after, 0, 0, 10, kHeight), 0u);
+}
+
+// A 3×2 image whose bottom row (stored first) is red and top row blue.
+Image two_row_image() {
+  Image image{3, 2, {}};
+  for (int i = 0; i < 3; ++i) image.rgba.insert(image.rgba.end(), {255, 0, 0, 255});
+  for (int i = 0; i < 3; ++i) image.rgba.insert(image.rgba.end(), {0, 0, 255, 255});
+  return image;
+}
+
+std::string read_bytes(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+uint32_t big_endian(const std::string& bytes, size_t offset) {
+  return uint32_t(uint8_t(bytes[offset])) << 24 | uint32_t(uint8_t(bytes[offset + 1])) << 16 |
+         uint32_t(uint8_t(bytes[offset + 2])) << 8 | uint8_t(bytes[offset + 3]);
+}
+
+TEST(WritePng, WritesAValidTopDownPng) {
+  test::TempDir dir;
+  std::string file = dir.file("out.png");
+  write_png(two_row_image(), file);
+  std::string bytes = read_bytes(file);
+  ASSERT_GE(bytes.size(), 33u);
+  EXPECT_EQ(bytes.substr(0, 8), std::string("\x89PNG\r\n\x1a\n", 8));
+  EXPECT_EQ(bytes.substr(12, 4), "IHDR");
+  EXPECT_EQ(big_endian(bytes, 16), 3u);
+  EXPECT_EQ(big_endian(bytes, 20), 2u);
+
+  int w = 0, h = 0, channels = 0;
+  stbi_uc* pixels = stbi_load(file.c_str(), &w, &h, &channels, 4);
+  ASSERT_NE(pixels, nullptr);
+  EXPECT_EQ(pixels[2], 255);  // first decoded row is the top: blue
+  EXPECT_EQ(pixels[3 * 4 * 1 + 0], 255);  // second row: red
+  stbi_image_free(pixels);
+}
+
+TEST(WritePng, FailureNamesTheFileAndKeepsTheOldOne) {
+  test::TempDir dir;
+  std::string missing = dir.file("no-such-folder/out.png");
+  try {
+    write_png(two_row_image(), missing);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(missing), std::string::npos) << e.what();
+  }
+
+  std::string file = dir.file("kept.png");
+  write_png(two_row_image(), file);
+  std::string before = read_bytes(file);
+  // A directory where the temporary would go makes the write fail even for root.
+  std::filesystem::create_directory(file + ".tmp." + std::to_string(::getpid()));
+  Image other = two_row_image();
+  other.rgba[0] = 7;
+  try {
+    write_png(other, file);
+    FAIL() << "expected an Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(file), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(read_bytes(file), before);
+  Image broken{4, 4, {1, 2, 3}};
+  EXPECT_THROW(write_png(broken, file), Error);
+  EXPECT_EQ(read_bytes(file), before);
+}
+
+}  // namespace
+}  // namespace cellwalk

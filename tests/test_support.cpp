@@ -1,0 +1,118 @@
+#include "test_support.hpp"
+
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <array>
+#include <atomic>
+#include <cstdio>
+#include <unistd.h>
+
+namespace cellwalk::test {
+
+std::string source_path(const std::string& relative) {
+  return std::string(CELLWALK_SOURCE_DIR) + "/" + relative;
+}
+
+std::string cgal_mesh(const std::string& name) {
+  std::string p = source_path("data/cgal/meshes/" + name);
+  if (!std::filesystem::exists(p))
+    ADD_FAILURE() << p << " is missing: run scripts/setup to unpack libcgal-demo's data";
+  return p;
+}
+
+std::string assimp_model(const std::string& relative) {
+  std::string p = "/usr/share/assimp/models/" + relative;
+  if (!std::filesystem::exists(p))
+    ADD_FAILURE() << p << " is missing: run scripts/setup to install assimp-testmodels";
+  return p;
+}
+
+TempDir::TempDir() {
+  static std::atomic<int> counter{0};
+  path_ = std::filesystem::temp_directory_path() /
+          ("cellwalk-test-" + std::to_string(getpid()) + "-" + std::to_string(counter++));
+  std::filesystem::remove_all(path_);
+  std::filesystem::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  std::filesystem::remove_all(path_, ec);
+}
+
+CommandResult run_cellwalk(const std::string& args) {
+  CommandResult result;
+  std::string command = std::string(CELLWALK_BINARY) + " " + args + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) {
+    result.exit_code = -1;
+    return result;
+  }
+  std::array<char, 4096> buffer;
+  size_t n;
+  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
+  int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+}  // namespace cellwalk::test
+
+#include "cellwalk/random.hpp"
+#include "cellwalk/scene_file.hpp"
+
+namespace cellwalk::test {
+
+Mesh box_mesh(const Aabb& b) {
+  Mesh m;
+  const Vec3 n[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  for (int f = 0; f < 6; ++f) {
+    // Two tangent axes of the face, ordered so triangles wind counter-clockwise seen from outside.
+    const Vec3 u = std::abs(n[f].y) > 0 ? Vec3(1, 0, 0) : Vec3(0, 1, 0);
+    const Vec3 v = glm::cross(n[f], u);
+    const Vec3 c = b.center() + n[f] * (b.size() * 0.5f);
+    const Vec3 hu = u * (b.size() * 0.5f), hv = v * (b.size() * 0.5f);
+    const uint32_t base = static_cast<uint32_t>(m.positions.size());
+    for (Vec3 p : {c - hu - hv, c + hu - hv, c + hu + hv, c - hu + hv}) {
+      m.positions.push_back(p);
+      m.normals.push_back(n[f]);
+    }
+    for (uint32_t i : {0u, 1u, 2u, 0u, 2u, 3u}) m.indices.push_back(base + i);
+  }
+  return m;
+}
+
+std::string write_street_scene(const TempDir& dir, int count, uint64_t seed) {
+  const std::string file = dir.file("street-" + std::to_string(seed) + ".cwscene");
+  Random rng(seed);
+  SceneWriter writer(file);
+  float length = 0;
+  for (int i = 0; i < count; ++i) {
+    const float side = (i % 2) ? 1.0f : -1.0f;
+    const float x = 6.0f * static_cast<float>(i / 2);
+    const float w = static_cast<float>(rng.uniform(2, 5)), h = static_cast<float>(rng.uniform(3, 20));
+    const float z0 = side * static_cast<float>(rng.uniform(4, 8));
+    Aabb box;
+    box.min = Vec3(x, 0, std::min(z0, z0 + side * w));
+    box.max = Vec3(x + w, h, std::max(z0, z0 + side * w));
+    Object o;
+    o.id = static_cast<ObjectId>(i);
+    o.name = "box" + std::to_string(i);
+    o.color = rgba8(static_cast<uint8_t>(rng.integer(40, 255)), static_cast<uint8_t>(rng.integer(40, 255)),
+                    static_cast<uint8_t>(rng.integer(40, 255)));
+    o.mesh = box_mesh(box);
+    o.bounds = box;
+    writer.add(o);
+    length = std::max(length, box.max.x);
+  }
+  SceneInfo info;
+  info.generator = "test-street";
+  info.seed = seed;
+  info.nav.nodes = {Vec3(-5, 1.7f, 0), Vec3(length + 5, 1.7f, 0)};
+  info.nav.edges = {{0, 1}};
+  writer.finish(info);
+  return file;
+}
+
+}  // namespace cellwalk::test

@@ -1,0 +1,156 @@
+#include "cellwalk/walk.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "strategy/brute.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+// A deliberately faulty strategy: brute force that drops one object it should draw.
+class DroppingStrategy : public BruteStrategy {
+ public:
+  DroppingStrategy(const SceneReader& scene, ObjectId dropped) : BruteStrategy(scene, true), dropped_(dropped) {}
+  std::string name() const override { return "dropping"; }
+  void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override {
+    BruteStrategy::select(camera, items, stats);
+    std::erase_if(items, [&](const DrawItem& i) { return i.object == dropped_; });
+  }
+
+ private:
+  ObjectId dropped_;
+};
+
+class WalkTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    scene_file_ = test::write_street_scene(dir_, 40);
+    scene_ = std::make_unique<SceneReader>(scene_file_);
+    PathParams p;
+    p.frames = 60;
+    path_ = generate_path(scene_->info().nav, p);
+    lens_.aspect = 160.0f / 120.0f;
+    context_ = GlContext::headless();
+    RenderSettings s;
+    s.width = 160;
+    s.height = 120;
+    renderer_ = std::make_unique<Renderer>(s);
+  }
+  test::TempDir dir_;
+  std::string scene_file_;
+  std::unique_ptr<SceneReader> scene_;
+  CameraPath path_;
+  Camera lens_;
+  std::unique_ptr<GlContext> context_;
+  std::unique_ptr<Renderer> renderer_;
+};
+
+TEST_F(WalkTest, BruteMatchesGroundTruthExactly) {
+  BruteStrategy brute(*scene_, true), truth(*scene_, false);
+  CompareOptions options;
+  options.every = 5;
+  auto frames = compare(path_, lens_, brute, truth, *renderer_, options);
+  ASSERT_EQ(frames.size(), 12u);
+  FidelitySummary s = summarize(frames);
+  EXPECT_EQ(s.max_differing_fraction, 0.0);
+  EXPECT_EQ(s.missed_objects, 0u);
+  EXPECT_GT(s.visible_objects, 12u);  // the frames did show objects
+}
+
+TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
+  // Drop the object most often visible in ground truth, found by rendering it.
+  BruteStrategy truth(*scene_, false);
+  Camera cam = lens_;
+  apply(path_.frames[0], cam);
+  render_frame(truth, *renderer_, cam);
+  IdImage ids = renderer_->read_ids();
+  std::map<uint32_t, int> area;
+  for (uint32_t id : ids.ids)
+    if (id != kBackgroundId) ++area[id];
+  ASSERT_FALSE(area.empty());
+  auto biggest = std::max_element(area.begin(), area.end(), [](auto& a, auto& b) { return a.second < b.second; });
+  DroppingStrategy dropping(*scene_, biggest->first - 1);
+  CompareOptions options;
+  options.every = 5;
+  FidelitySummary s = summarize(compare(path_, lens_, dropping, truth, *renderer_, options));
+  EXPECT_GT(s.missed_objects, 0u);
+  EXPECT_LT(s.recall, 1.0);
+  EXPECT_GT(s.max_differing_fraction, 0.0);
+}
+
+TEST_F(WalkTest, WalkMeasuresEveryFrame) {
+  BruteStrategy brute(*scene_, true);
+  auto frames = walk(path_, lens_, brute, *renderer_);
+  ASSERT_EQ(frames.size(), path_.frames.size());
+  uint64_t bytes = 0;
+  for (const FrameStats& f : frames) {
+    EXPECT_GE(f.frame_ms, f.query_ms);
+    EXPECT_GT(f.objects, 0u);
+    EXPECT_EQ(f.triangles, 12 * f.objects);  // boxes
+    bytes += f.bytes_read;
+  }
+  // With an ample GPU budget each visible object is read from the file once.
+  EXPECT_EQ(bytes, scene_->bytes_read());
+  WalkSummary s = summarize("brute", frames);
+  EXPECT_EQ(s.frames, frames.size());
+  EXPECT_LE(s.p50_ms, s.p95_ms);
+  EXPECT_LE(s.p95_ms, s.max_ms);
+}
+
+TEST(CompareImages, CountsDifferencesAndMissedObjects) {
+  Image a{2, 1, {10, 10, 10, 255, 20, 20, 20, 255}}, b = a;
+  IdImage ia{2, 1, {1, 2}}, ib{2, 1, {1, 0}};
+  b.rgba[4] = 30;
+  Image diff;
+  FidelityFrame f = compare_images(a, ia, b, ib, &diff);
+  EXPECT_DOUBLE_EQ(f.differing_fraction, 0.5);
+  EXPECT_EQ(f.visible_objects, 2u);
+  EXPECT_EQ(f.missed_objects, 1u);
+  EXPECT_EQ(diff.rgba[0], 128);
+  EXPECT_EQ(diff.rgba[4], 138);
+  EXPECT_NEAR(f.psnr_db, 10 * std::log10(255.0 * 255.0 / (100.0 / 6.0)), 1e-9);
+  FidelityFrame same = compare_images(a, ia, a, ia, nullptr);
+  EXPECT_EQ(same.differing_fraction, 0.0);
+  EXPECT_TRUE(std::isinf(same.psnr_db));
+}
+
+TEST(WalkCommand, WritesCsvAndJson) {
+  test::TempDir dir;
+  const std::string scene = test::write_street_scene(dir, 20);
+  auto r = test::run_cellwalk("path " + scene + " --frames 30 -o " + dir.file("p.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("walk " + scene + " --path " + dir.file("p.txt") + " --width 96 --height 64 -o " +
+                         dir.file("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream csv(dir.file("out/brute.csv"));
+  std::string line;
+  int lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 31);
+  auto json = nlohmann::json::parse(std::ifstream(dir.file("out/brute.json")));
+  EXPECT_EQ(json["frames"], 30);
+  EXPECT_GT(json["frame_ms"]["mean"].get<double>(), 0.0);
+  EXPECT_GT(json["peak_resident_bytes"].get<uint64_t>(), 0u);
+  r = test::run_cellwalk("compare " + scene + " --path " + dir.file("p.txt") +
+                         " --every 10 --width 96 --height 64 --json -o " + dir.file("cmp"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"mean_differing_fraction\": 0.0"), std::string::npos) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("cmp/frame0-diff.png")));
+}
+
+TEST(WalkCommand, BadPathFileGivesOneClearLine) {
+  test::TempDir dir;
+  const std::string scene = test::write_street_scene(dir, 4);
+  std::ofstream(dir.file("p.txt")) << "# cellwalk path 1\n0 1 2\n";
+  auto r = test::run_cellwalk("walk " + scene + " --path " + dir.file("p.txt"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find(dir.file("p.txt") + ":2: expected 6 numbers"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace cellwalk
