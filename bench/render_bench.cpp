@@ -39,7 +39,9 @@ Mesh unit_sphere() {
   return mesh;
 }
 
-int grid_side(uint64_t spheres) { return int(std::ceil(std::sqrt(double(spheres)))); }
+int grid_side(uint64_t spheres) {
+  return int(std::ceil(std::sqrt(double(spheres))));
+}
 
 // Sphere `object` of the grid: the unit sphere moved to its cell. The returned pointer stays
 // valid until the next call, as MeshProvider allows.
@@ -103,12 +105,28 @@ void run(benchmark::State& state, uint64_t budget_bytes) {
   state.SetLabel(context().renderer_name());
 }
 
-void BM_RenderResident(benchmark::State& state) { run(state, 1ull << 30); }
-void BM_RenderStreaming(benchmark::State& state) { run(state, 0); }
+void BM_RenderResident(benchmark::State& state) {
+  run(state, 1ull << 30);
+}
+void BM_RenderStreaming(benchmark::State& state) {
+  run(state, 0);
+}
 
-BENCHMARK(BM_RenderResident)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_RenderResident)->Arg(10'000'000)->Iterations(3)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_RenderStreaming)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_RenderResident)
+    ->Arg(100'000)
+    ->Arg(1'000'000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_RenderResident)
+    ->Arg(10'000'000)
+    ->Iterations(3)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_RenderStreaming)
+    ->Arg(100'000)
+    ->Arg(1'000'000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace
 }  // namespace cellwalk

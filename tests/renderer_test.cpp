@@ -3,7 +3,9 @@
 // PNG output.
 #include "cellwalk/renderer.hpp"
 
+#include <epoxy/gl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
@@ -13,10 +15,6 @@
 #include <map>
 #include <random>
 #include <set>
-
-#include <unistd.h>
-
-#include <epoxy/gl.h>
 
 #include "cellwalk/error.hpp"
 #include "render/gpu_mesh_cache.hpp"
@@ -75,7 +73,9 @@ Camera test_camera() {
 // Meshes by (object, lod), served by pointer as the renderer's provider expects.
 class Meshes {
  public:
-  void add(ObjectId object, Mesh mesh, uint32_t lod = 0) { meshes_[{object, lod}] = std::move(mesh); }
+  void add(ObjectId object, Mesh mesh, uint32_t lod = 0) {
+    meshes_[{object, lod}] = std::move(mesh);
+  }
   MeshProvider provider() {
     return [this](const DrawItem& item) -> const Mesh* {
       ++calls_;
@@ -90,7 +90,9 @@ class Meshes {
   int calls_ = 0;
 };
 
-uint32_t id_at(const IdImage& image, int x, int y) { return image.ids[size_t(y) * image.width + x]; }
+uint32_t id_at(const IdImage& image, int x, int y) {
+  return image.ids[size_t(y) * image.width + x];
+}
 
 class RendererTest : public ::testing::Test {
  protected:
@@ -121,7 +123,8 @@ TEST_F(RendererTest, BoxInFrontOfTheCameraFillsTheCentreWithItsId) {
 
   IdImage ids = renderer.read_ids();
   EXPECT_EQ(id_at(ids, kWidth / 2, kHeight / 2), 8u);
-  for (auto [x, y] : {std::pair{0, 0}, {kWidth - 1, 0}, {0, kHeight - 1}, {kWidth - 1, kHeight - 1}}) {
+  for (auto [x, y] :
+       {std::pair{0, 0}, {kWidth - 1, 0}, {0, kHeight - 1}, {kWidth - 1, kHeight - 1}}) {
     EXPECT_EQ(id_at(ids, x, y), kBackgroundId);
   }
   Image color = renderer.read_color();
@@ -140,7 +143,7 @@ TEST_F(RendererTest, BoxInFrontOfTheCameraFillsTheCentreWithItsId) {
 
 TEST_F(RendererTest, NearerObjectWinsTheIdWhateverTheOrder) {
   Meshes meshes;
-  meshes.add(1, make_box(Vec3(0.0f, 0.0f, 2.0f), Vec3(0.5f)));  // near
+  meshes.add(1, make_box(Vec3(0.0f, 0.0f, 2.0f), Vec3(0.5f)));   // near
   meshes.add(2, make_box(Vec3(0.0f, 0.0f, -3.0f), Vec3(2.0f)));  // far, larger
   meshes.add(3, make_box(Vec3(0.0f, 0.0f, 4.0f), Vec3(0.2f)));   // nearest, small
   Renderer renderer(settings());
@@ -161,7 +164,8 @@ Meshes random_scene(int count, uint32_t seed) {
   Meshes meshes;
   for (int i = 0; i < count; ++i) {
     Vec3 center(position(rng), position(rng) * 0.7f, position(rng));
-    meshes.add(ObjectId(i), make_box(center, Vec3(size(rng), size(rng), size(rng)), tessellation(rng)));
+    meshes.add(ObjectId(i),
+               make_box(center, Vec3(size(rng), size(rng), size(rng)), tessellation(rng)));
   }
   return meshes;
 }
@@ -325,13 +329,14 @@ TEST_F(RendererTest, LinesAreDrawnOverTheImageAndLeaveIdsAlone) {
   Image before = renderer.read_color();
   IdImage ids = renderer.read_ids();
   // A horizontal line through the centre, in front of and beyond the box.
-  std::vector<LineSegment> segments{{Vec3(-20.0f, 0.0f, 0.0f), Vec3(20.0f, 0.0f, 0.0f),
-                                     rgba8(255, 0, 255)}};
+  std::vector<LineSegment> segments{
+      {Vec3(-20.0f, 0.0f, 0.0f), Vec3(20.0f, 0.0f, 0.0f), rgba8(255, 0, 255)}};
   renderer.draw_lines(test_camera(), segments);
   Image after = renderer.read_color();
   EXPECT_EQ(renderer.read_ids().ids, ids.ids);
   int centre_row = kHeight / 2;
-  EXPECT_GT(changed_pixels(before, after, 0, centre_row - 1, kWidth, centre_row + 1), size_t(kWidth) * 9 / 10);
+  EXPECT_GT(changed_pixels(before, after, 0, centre_row - 1, kWidth, centre_row + 1),
+            size_t(kWidth) * 9 / 10);
   EXPECT_EQ(changed_pixels(before, after, 0, 0, kWidth, centre_row - 2), 0u);
   EXPECT_EQ(changed_pixels(before, after, 0, centre_row + 2, kWidth, kHeight), 0u);
   // The next frame starts clean.
@@ -386,7 +391,7 @@ TEST(WritePng, WritesAValidTopDownPng) {
   int w = 0, h = 0, channels = 0;
   stbi_uc* pixels = stbi_load(file.c_str(), &w, &h, &channels, 4);
   ASSERT_NE(pixels, nullptr);
-  EXPECT_EQ(pixels[2], 255);  // first decoded row is the top: blue
+  EXPECT_EQ(pixels[2], 255);              // first decoded row is the top: blue
   EXPECT_EQ(pixels[3 * 4 * 1 + 0], 255);  // second row: red
   stbi_image_free(pixels);
 }

@@ -1,5 +1,33 @@
-// PLACEHOLDER: replaced by the real command before the first commit.
+// cellwalk view: the interactive viewer in a window.
+#include "cellwalk/strategy.hpp"
+#include "cellwalk/viewer.hpp"
 #include "commands.hpp"
+
 namespace cellwalk::app {
-void register_view(CLI::App& root) { root.add_subcommand("view", "(not yet built)"); }
+
+void register_view(CLI::App& root) {
+  auto* cmd = root.add_subcommand("view",
+                                  "Walk or fly through a scene in a window (W/A/S/D, drag to look, B bird's-eye, "
+                                  "R record, F fly, Esc quit)");
+  struct Args {
+    std::string scene;
+    ViewerOptions options;
+  };
+  auto args = std::make_shared<Args>();
+  cmd->add_option("scene", args->scene, "Scene file (.cwscene)")->required();
+  cmd->add_option("--strategy", args->options.strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
+  cmd->add_option("--width", args->options.width, "Window width")->capture_default_str();
+  cmd->add_option("--height", args->options.height, "Window height")->capture_default_str();
+  cmd->add_option("--fov", args->options.fov_y_deg, "Vertical field of view, degrees")->capture_default_str();
+  cmd->add_option("--record", args->options.record_file, "Record the flown path to this file from the start (R stops/starts; default file recorded.path)");
+  cmd->add_option("--replay", args->options.replay_file, "Follow this path file instead of the keyboard");
+  cmd->add_option("--frames", args->options.max_frames, "Quit after this many frames (0 = run until closed)")->capture_default_str();
+  cmd->add_option("--screenshot", args->options.screenshot_file, "Write the last frame to this PNG on exit");
+  cmd->add_flag("--birds-eye", args->options.birds_eye, "Start in the bird's-eye view");
+  cmd->callback([args] {
+    SceneReader scene(args->scene);
+    run_viewer(scene, args->options);
+  });
+}
+
 }  // namespace cellwalk::app

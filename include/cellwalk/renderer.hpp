@@ -79,8 +79,9 @@ class Renderer {
   // include them) without depth test; the id target is left as render() wrote it. Call them
   // after render(), which clears everything. One-pixel lines (all core profiles guarantee).
   void draw_lines(const Camera& camera, std::span<const LineSegment> segments);
-  // ASCII text in stb_easy_font's 8-pixel-high glyphs times `scale`; (x, y) is the top-left
-  // corner in pixels from the image's top-left; '\n' starts a new line.
+  // ASCII text in stb_easy_font's glyphs (about 7 px tall on 12 px lines at scale 1, times
+  // `scale`); (x, y) is the top-left corner in pixels from the image's top-left; '\n' starts
+  // a new line.
   void draw_text(float x, float y, std::string_view text, Rgba8 color, float scale = 1.0f);
 
   Image read_color() const;

@@ -102,8 +102,10 @@ class EglContext : public GlContext {
  private:
   void create() {
     if (!has_extension(eglQueryString(display_, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context")) {
-      fail(kWhere, "EGL cannot make a context current without a surface "
-                   "(EGL_KHR_surfaceless_context missing)" + std::string(kInstallHint));
+      fail(kWhere,
+           "EGL cannot make a context current without a surface "
+           "(EGL_KHR_surfaceless_context missing)" +
+               std::string(kInstallHint));
     }
     // The surfaceless platform offers pbuffer configurations only (the default asks for windows).
     const EGLint config_attributes[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE,
@@ -114,8 +116,10 @@ class EglContext : public GlContext {
       fail(kWhere, "no EGL configuration supports desktop OpenGL: " + egl_error_text());
     }
     if (!eglBindAPI(EGL_OPENGL_API)) fail(kWhere, "EGL cannot bind desktop OpenGL");
-    const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
-                                         EGL_CONTEXT_MINOR_VERSION, 5,
+    const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                         4,
+                                         EGL_CONTEXT_MINOR_VERSION,
+                                         5,
                                          EGL_CONTEXT_OPENGL_PROFILE_MASK,
                                          EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                          EGL_NONE};
@@ -136,6 +140,8 @@ class EglContext : public GlContext {
 
 }  // namespace
 
-std::unique_ptr<GlContext> GlContext::headless() { return std::make_unique<EglContext>(); }
+std::unique_ptr<GlContext> GlContext::headless() {
+  return std::make_unique<EglContext>();
+}
 
 }  // namespace cellwalk

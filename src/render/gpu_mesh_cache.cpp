@@ -25,10 +25,11 @@ uint32_t snorm10(float v) {
 }
 
 // GL_INT_2_10_10_10_REV: x in the low bits, w (unused) in the top two.
-uint32_t pack_normal(const Vec3& n) { return snorm10(n.x) | snorm10(n.y) << 10 | snorm10(n.z) << 20; }
+uint32_t pack_normal(const Vec3& n) {
+  return snorm10(n.x) | snorm10(n.y) << 10 | snorm10(n.z) << 20;
+}
 
-void interleave(const Mesh& mesh, const std::vector<Vec3>& normals, uint32_t stride,
-                uint8_t* out) {
+void interleave(const Mesh& mesh, const std::vector<Vec3>& normals, uint32_t stride, uint8_t* out) {
   for (size_t i = 0; i < mesh.positions.size(); ++i, out += stride) {
     std::memcpy(out, &mesh.positions[i], kPositionBytes);
     uint32_t normal = pack_normal(normals[i]);
@@ -42,7 +43,8 @@ void interleave(const Mesh& mesh, const std::vector<Vec3>& normals, uint32_t str
 }  // namespace
 
 uint64_t GpuMesh::bytes_for(const Mesh& mesh) {
-  return uint64_t(stride_for(mesh)) * mesh.positions.size() + sizeof(uint32_t) * mesh.indices.size();
+  return uint64_t(stride_for(mesh)) * mesh.positions.size() +
+         sizeof(uint32_t) * mesh.indices.size();
 }
 
 GpuMesh::GpuMesh(const Mesh& mesh)

@@ -7,11 +7,10 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
-#include <string>
-#include <vector>
-
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
+#include <string>
+#include <vector>
 
 #include "cellwalk/error.hpp"
 #include "render/gpu_mesh_cache.hpp"
@@ -165,6 +164,7 @@ struct Renderer::Impl {
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
     glDisable(GL_CULL_FACE);
+    glDisable(GL_SCISSOR_TEST);  // it would clip the clears too
     std::array<float, 4> background = unpack_color(settings.background);
     const GLuint no_object[4] = {kBackgroundId, 0, 0, 0};
     const float far_depth = 1.0f;
@@ -281,8 +281,8 @@ RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> ite
   }
   glFinish();
   stats.gpu_resident_bytes = impl_->cache.resident_bytes();
-  stats.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                 .count();
+  stats.ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return stats;
 }
 
@@ -328,6 +328,8 @@ void Renderer::present(int window_width, int window_height) const {
                          window_height, GL_COLOR_BUFFER_BIT, same_size ? GL_NEAREST : GL_LINEAR);
 }
 
-const RenderSettings& Renderer::settings() const { return impl_->settings; }
+const RenderSettings& Renderer::settings() const {
+  return impl_->settings;
+}
 
 }  // namespace cellwalk

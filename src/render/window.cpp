@@ -3,6 +3,8 @@
 
 #include <epoxy/gl.h>
 
+// GL comes from epoxy; GLFW must not include the system GL header too.
+#define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
 #include "cellwalk/error.hpp"
@@ -23,8 +25,8 @@ class GlfwLibrary {
  public:
   static void acquire() {
     if (users_ == 0 && !glfwInit()) {
-      fail(kWhere, "cannot initialise GLFW: " + glfw_error_text() +
-                       " (set DISPLAY or run under xvfb-run)");
+      fail(kWhere,
+           "cannot initialise GLFW: " + glfw_error_text() + " (set DISPLAY or run under xvfb-run)");
     }
     ++users_;
   }
@@ -93,13 +95,27 @@ std::string Window::renderer_name() const {
   return reinterpret_cast<const char*>(glGetString(GL_RENDERER));
 }
 
-void Window::set_callbacks(WindowCallbacks callbacks) { impl_->callbacks = std::move(callbacks); }
-bool Window::should_close() const { return glfwWindowShouldClose(impl_->window); }
-void Window::request_close() { glfwSetWindowShouldClose(impl_->window, GLFW_TRUE); }
-void Window::poll_events() { glfwPollEvents(); }
-void Window::swap_buffers() { glfwSwapBuffers(impl_->window); }
-void Window::set_title(const std::string& title) { glfwSetWindowTitle(impl_->window, title.c_str()); }
-bool Window::key_down(int key) const { return glfwGetKey(impl_->window, key) == GLFW_PRESS; }
+void Window::set_callbacks(WindowCallbacks callbacks) {
+  impl_->callbacks = std::move(callbacks);
+}
+bool Window::should_close() const {
+  return glfwWindowShouldClose(impl_->window);
+}
+void Window::request_close() {
+  glfwSetWindowShouldClose(impl_->window, GLFW_TRUE);
+}
+void Window::poll_events() {
+  glfwPollEvents();
+}
+void Window::swap_buffers() {
+  glfwSwapBuffers(impl_->window);
+}
+void Window::set_title(const std::string& title) {
+  glfwSetWindowTitle(impl_->window, title.c_str());
+}
+bool Window::key_down(int key) const {
+  return glfwGetKey(impl_->window, key) == GLFW_PRESS;
+}
 void Window::cursor_position(double& x, double& y) const {
   glfwGetCursorPos(impl_->window, &x, &y);
 }

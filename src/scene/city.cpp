@@ -85,15 +85,19 @@ Mesh house3() {  // a one-storey cottage
   return a.take();
 }
 
-Mesh tower1() {  // three set-back slabs with floor lines and a mast
+Mesh tower1() {  // three set-back slabs with floor lines, window strips and a mast
   Assembly a;
   const float widths[] = {16, 12, 8}, heights[] = {20, 16, 12};
+  const int strips[] = {3, 2, 2};
   float y = 0;
   for (int s = 0; s < 3; ++s) {
     a.add(shapes::box({widths[s], heights[s], widths[s]}), Vec3(0, y, 0));
     const int floors = static_cast<int>(heights[s] / 3.5f);
     for (int f = 1; f <= floors; ++f)
       a.add(shapes::box({widths[s] + 0.4f, 0.3f, widths[s] + 0.4f}), Vec3(0, y + 3.5f * f - 0.3f, 0));
+    Assembly windows;
+    add_windows(windows, widths[s], widths[s], 0, heights[s], 1, strips[s]);
+    a.add(windows.take(), Vec3(0, y, 0));
     y += heights[s];
   }
   a.add(shapes::cylinder(0.3f, 10, 6), Vec3(0, y, 0));
@@ -123,7 +127,7 @@ Mesh tower4() {  // twin towers joined by sky bridges
     Assembly t;
     t.add(shapes::box({8, 40, 8}), Vec3(0));
     t.add(shapes::pyramid({8, 6, 8}), Vec3(0, 40, 0));
-    add_windows(t, 8, 8, 0, 5, 8, 2);
+    add_windows(t, 8, 8, 0, 40.0f / 7, 7, 2);
     a.add(t.take(), Vec3(side * 6, 0, 0));
   }
   a.add(shapes::box({4, 3, 3}), Vec3(0, 18, 0));

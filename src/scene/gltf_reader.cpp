@@ -119,6 +119,8 @@ tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& ba
     fail(name, std::string("glTF parser failed: ") + e.what());
   }
   if (!ok) fail(name, first_line(err));
+  if (!model.asset.version.starts_with("2."))
+    fail(name, "glTF version '" + model.asset.version + "' is not supported; only 2.x is");
   return model;
 }
 
@@ -163,7 +165,7 @@ struct AccessorView {
 
 AccessorView view_of(const tinygltf::Model& m, int index, const std::string& where) {
   auto bad = [&where, index](const std::string& what) {
-    fail(where, "accessor " + std::to_string(index) + " " + what);
+    fail(where, "accessor " + format_number(index) + " " + what);
   };
   if (index < 0 || static_cast<size_t>(index) >= m.accessors.size()) bad("does not exist");
   const tinygltf::Accessor& a = m.accessors[index];
@@ -251,7 +253,7 @@ Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
     for (size_t i = 0; i < iv.count; ++i) {
       const double index = iv.get(i, 0);
       if (!(index >= 0.0 && index < double(pos.count)))
-        fail(where, "index " + std::to_string(index) + " is out of range for " +
+        fail(where, "index " + format_number(index) + " is out of range for " +
                         std::to_string(pos.count) + " vertices");
       order[i] = static_cast<uint32_t>(index);
     }
@@ -356,8 +358,8 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
     auto [index, parent] = stack.back();
     stack.pop_back();
     if (index < 0 || static_cast<size_t>(index) >= m.nodes.size())
-      fail(name, "node " + std::to_string(index) + " does not exist");
-    if (visited[index]) fail(name, "node " + std::to_string(index) + " is reached twice (cycle)");
+      fail(name, "node " + format_number(index) + " does not exist");
+    if (visited[index]) fail(name, "node " + format_number(index) + " is reached twice (cycle)");
     visited[index] = true;
     const tinygltf::Node& node = m.nodes[index];
     const Mat4 world = parent * local_matrix(node, name + ": node " + std::to_string(index));

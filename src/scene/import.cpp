@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -35,6 +36,12 @@ std::vector<uint8_t> read_whole_file(const std::string& path) {
   return bytes;
 }
 
+std::string format_number(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", v);
+  return text;
+}
+
 void finish_object(Object& object, const std::string& name) {
   validate(object.mesh, name);
   if (object.mesh.normals.empty()) compute_normals(object.mesh);
@@ -54,10 +61,16 @@ std::vector<Object> parse(ModelFormat format, std::span<const uint8_t> bytes,
                           const std::string& name, ObjectId first_id,
                           const std::string& base_dir) {
   if (bytes.empty()) fail(name, "is empty");
-  if (format == ModelFormat::kGltf) return detail::read_gltf(bytes, name, first_id, base_dir);
+  if (format == ModelFormat::kGltf) {
+    std::vector<Object> objects = detail::read_gltf(bytes, name, first_id, base_dir);
+    if (objects.empty()) fail(name, "the scene has no mesh node with triangles");
+    return objects;
+  }
   Object object = format == ModelFormat::kOff   ? detail::read_off(bytes, name)
                   : format == ModelFormat::kPly ? detail::read_ply(bytes, name)
                                                 : detail::read_obj(bytes, name);
+  // A point cloud is accepted (it has vertices); a file with none is not a model at all.
+  if (object.mesh.positions.empty()) fail(name, "holds no vertices");
   object.id = first_id;
   object.name = std::filesystem::path(name).stem().string();
   detail::finish_object(object, name);

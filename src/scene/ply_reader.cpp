@@ -288,7 +288,7 @@ void read_faces(BodyReader& body, const Element& e, uint64_t vertex_count, Mesh&
       for (uint64_t i = 0; i < n; ++i) {
         const double index = body.read(p.type);
         if (!(index >= 0.0 && index < double(vertex_count)) || index != double(int64_t(index)))
-          body.fail("face " + std::to_string(f) + " uses vertex " + std::to_string(index) +
+          body.fail("face " + std::to_string(f) + " uses vertex " + format_number(index) +
                     " but there are " + std::to_string(vertex_count) + " vertices");
         polygon.push_back(static_cast<uint32_t>(index));
       }

@@ -32,6 +32,9 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
 constexpr uint64_t kMaxModelBytes = uint64_t(2) << 30;
 std::vector<uint8_t> read_whole_file(const std::string& path);
 
+// A value read as a double (an index, a count) for a message: "12", "1.5", "nan".
+std::string format_number(double v);
+
 // Validates the mesh, computes normals when absent and sets the bounds.
 void finish_object(Object& object, const std::string& name);
 

@@ -1,5 +1,6 @@
 // TextCursor: the one tokenizer of the text model formats (OFF, ASCII PLY, OBJ).
 #include <charconv>
+#include <cstdlib>
 #include <string>
 
 #include "cellwalk/error.hpp"
@@ -69,8 +70,9 @@ double TextCursor::to_double(std::string_view token, std::string_view what) cons
   token = drop_plus(token);
   double value = 0.0;
   auto [end, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
-  // Out-of-range values become inf and are reported by validate() as non-finite.
-  if (ec == std::errc::result_out_of_range) return value;
+  // from_chars leaves `value` unset when out of range; strtod gives the ±inf (or 0 on
+  // underflow) that validate() then judges.
+  if (ec == std::errc::result_out_of_range) return std::strtod(std::string(token).c_str(), nullptr);
   if (ec != std::errc() || end != token.data() + token.size())
     fail("expected " + std::string(what) + ", found '" + std::string(token.substr(0, 40)) + "'");
   return value;

@@ -1,0 +1,15 @@
+// libFuzzer target for the glTF / GLB reader: any input must give objects or a cellwalk::Error,
+// never a crash, a hang, another exception or an allocation the input cannot justify.
+#include <cstddef>
+#include <cstdint>
+
+#include "cellwalk/error.hpp"
+#include "cellwalk/import.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  try {
+    cellwalk::parse_model(cellwalk::ModelFormat::kGltf, {data, size}, "fuzz.gltf");
+  } catch (const cellwalk::Error&) {
+  }
+  return 0;
+}

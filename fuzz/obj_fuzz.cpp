@@ -1,0 +1,15 @@
+// libFuzzer target for the OBJ reader: any input must give objects or a cellwalk::Error,
+// never a crash, a hang, another exception or an allocation the input cannot justify.
+#include <cstddef>
+#include <cstdint>
+
+#include "cellwalk/error.hpp"
+#include "cellwalk/import.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  try {
+    cellwalk::parse_model(cellwalk::ModelFormat::kObj, {data, size}, "fuzz.obj");
+  } catch (const cellwalk::Error&) {
+  }
+  return 0;
+}

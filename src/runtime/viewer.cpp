@@ -1,0 +1,219 @@
+// The interactive viewer. It uses the same frame loop (render_frame) as the headless walk
+// harness, so what a person sees is what the benches measure.
+#include "cellwalk/viewer.hpp"
+
+#include <GLFW/glfw3.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "cellwalk/path.hpp"
+#include "cellwalk/walk.hpp"
+#include "cellwalk/window.hpp"
+#include "core/stopwatch.hpp"
+
+namespace cellwalk {
+namespace {
+
+constexpr float kEyeHeight = 1.7f;
+constexpr float kWalkSpeed = 3.0f;      // metres per second; Shift multiplies by kRunFactor
+constexpr float kRunFactor = 6.0f;
+constexpr float kMouseDegPerPixel = 0.15f;
+
+// Where a viewer starts: on the first navigation edge, looking along it.
+void place_at_start(const SceneInfo& info, Camera& camera) {
+  if (!info.nav.edges.empty()) {
+    const Vec3 a = info.nav.nodes[info.nav.edges[0].first], b = info.nav.nodes[info.nav.edges[0].second];
+    camera.position = a;
+    const Vec3 d = b - a;
+    camera.yaw_deg = glm::degrees(std::atan2(-d.x, -d.z));
+    return;
+  }
+  camera.position = info.bounds.center() + Vec3(0, 0, info.bounds.size().z);
+}
+
+// The twelve edges of a box.
+void add_box(const Aabb& b, Rgba8 color, std::vector<LineSegment>& out) {
+  auto corner = [&](int i) {
+    return Vec3((i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
+  };
+  for (int i = 0; i < 8; ++i)
+    for (int bit : {1, 2, 4})
+      if (!(i & bit)) out.push_back({corner(i), corner(i | bit), color});
+}
+
+// The walker's frustum, cut at `depth` metres so it stays readable from above.
+void add_frustum(const Camera& camera, float depth, std::vector<LineSegment>& out) {
+  const float h = depth * std::tan(glm::radians(camera.fov_y_deg) * 0.5f), w = h * camera.aspect;
+  const Vec3 c = camera.position + camera.forward() * depth;
+  const Vec3 r = camera.right() * w, u = camera.up() * h;
+  const Vec3 far[4] = {c - r - u, c + r - u, c + r + u, c - r + u};
+  const Rgba8 red = rgba8(230, 30, 30);
+  for (int i = 0; i < 4; ++i) {
+    out.push_back({camera.position, far[i], red});
+    out.push_back({far[i], far[(i + 1) % 4], red});
+  }
+}
+
+Camera birds_eye_camera(const Aabb& bounds, const Camera& lens) {
+  Camera top = lens;
+  const Vec3 size = bounds.size();
+  const float span = std::max(size.x, size.z);
+  top.position = Vec3(bounds.center().x, bounds.max.y + span / (2.0f * std::tan(glm::radians(lens.fov_y_deg) * 0.5f)),
+                      bounds.center().z);
+  top.yaw_deg = 0;
+  top.pitch_deg = -89.9f;
+  top.near_plane = std::max(0.1f, span * 1e-4f);
+  top.far_plane = top.position.y + span;
+  return top;
+}
+
+struct ViewerState {
+  Camera camera;
+  bool fly = false;
+  bool birds_eye = false;
+  bool recording = false;
+  bool dragging = false;
+  double last_x = 0, last_y = 0;
+  double clock = 0;
+  CameraPath recorded;
+  bool screenshot_requested = false;
+};
+
+void move(ViewerState& s, const Window& window, float dt) {
+  float speed = kWalkSpeed * (window.key_down(GLFW_KEY_LEFT_SHIFT) ? kRunFactor : 1.0f) * dt;
+  Vec3 forward = s.camera.forward(), right = s.camera.right();
+  if (!s.fly) forward = glm::normalize(Vec3(forward.x, 0, forward.z));
+  Vec3 step(0.0f);
+  if (window.key_down(GLFW_KEY_W) || window.key_down(GLFW_KEY_UP)) step += forward;
+  if (window.key_down(GLFW_KEY_S) || window.key_down(GLFW_KEY_DOWN)) step -= forward;
+  if (window.key_down(GLFW_KEY_D)) step += right;
+  if (window.key_down(GLFW_KEY_A)) step -= right;
+  if (s.fly && window.key_down(GLFW_KEY_E)) step.y += 1;
+  if (s.fly && window.key_down(GLFW_KEY_Q)) step.y -= 1;
+  if (window.key_down(GLFW_KEY_LEFT)) s.camera.yaw_deg += 90.0f * dt;
+  if (window.key_down(GLFW_KEY_RIGHT)) s.camera.yaw_deg -= 90.0f * dt;
+  if (glm::length(step) > 0) s.camera.position += glm::normalize(step) * speed;
+  if (!s.fly) s.camera.position.y = kEyeHeight;
+}
+
+std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, const std::string& strategy) {
+  char text[512];
+  std::snprintf(text, sizeof text,
+                "%s  %.1f fps  frame %.1f ms (query %.1f io %.1f decode %.1f render %.1f)\n"
+                "%llu objects  %llu triangles  %.1f MiB resident\n"
+                "%s%s%s  pos %.1f %.1f %.1f  yaw %.0f pitch %.0f\n"
+                "WASD move, drag look, Shift run, F fly, B bird's-eye, R record, P screenshot, Esc quit",
+                strategy.c_str(), fps, f.frame_ms, f.query_ms, f.io_ms, f.decode_ms, f.render_ms,
+                (unsigned long long)f.objects, (unsigned long long)f.triangles, f.resident_bytes / 1048576.0,
+                s.fly ? "fly" : "walk", s.birds_eye ? "  bird's-eye" : "",
+                s.recording ? "  RECORDING" : "", s.camera.position.x, s.camera.position.y,
+                s.camera.position.z, s.camera.yaw_deg, s.camera.pitch_deg);
+  return text;
+}
+
+}  // namespace
+
+void run_viewer(const SceneReader& scene, const ViewerOptions& options) {
+  Window window(options.width, options.height, "cellwalk — " + scene.path(), options.max_frames == 0);
+  auto strategy = make_strategy(options.strategy, scene, {});
+  int fb_width, fb_height;
+  window.framebuffer_size(fb_width, fb_height);
+  RenderSettings settings;
+  settings.width = fb_width;
+  settings.height = fb_height;
+  auto renderer = std::make_unique<Renderer>(settings);
+
+  ViewerState s;
+  s.birds_eye = options.birds_eye;
+  s.camera.fov_y_deg = options.fov_y_deg;
+  s.camera.aspect = float(fb_width) / float(fb_height);
+  place_at_start(scene.info(), s.camera);
+  CameraPath replay;
+  if (!options.replay_file.empty()) replay = read_path(options.replay_file);
+  const std::string record_file = options.record_file.empty() ? "recorded.path" : options.record_file;
+  s.recording = !options.record_file.empty();  // --record records from the first frame
+
+  auto save_recording = [&] {
+    if (s.recorded.frames.empty()) return;
+    write_path(s.recorded, record_file);
+    std::printf("view: recorded %zu frames to %s\n", s.recorded.frames.size(), record_file.c_str());
+  };
+  WindowCallbacks callbacks;
+  callbacks.key = [&](int key, int action, int) {
+    if (action != GLFW_PRESS) return;
+    if (key == GLFW_KEY_ESCAPE) window.request_close();
+    if (key == GLFW_KEY_F) s.fly = !s.fly;
+    if (key == GLFW_KEY_B) s.birds_eye = !s.birds_eye;
+    if (key == GLFW_KEY_P) s.screenshot_requested = true;
+    if (key == GLFW_KEY_R) {
+      if (s.recording) save_recording();
+      s.recording = !s.recording;
+      s.recorded.frames.clear();
+    }
+  };
+  callbacks.mouse_button = [&](int button, int action, int) {
+    if (button != GLFW_MOUSE_BUTTON_LEFT && button != GLFW_MOUSE_BUTTON_RIGHT) return;
+    s.dragging = action == GLFW_PRESS;
+    window.cursor_position(s.last_x, s.last_y);
+  };
+  callbacks.cursor = [&](double x, double y) {
+    if (!s.dragging) return;
+    s.camera.yaw_deg -= float(x - s.last_x) * kMouseDegPerPixel;
+    s.camera.pitch_deg = std::clamp(s.camera.pitch_deg - float(y - s.last_y) * kMouseDegPerPixel, -89.0f, 89.0f);
+    s.last_x = x;
+    s.last_y = y;
+  };
+  callbacks.framebuffer_size = [&](int w, int h) {
+    if (w <= 0 || h <= 0) return;  // minimised
+    settings.width = w;
+    settings.height = h;
+    renderer = std::make_unique<Renderer>(settings);
+    s.camera.aspect = float(w) / float(h);
+  };
+  window.set_callbacks(callbacks);
+
+  Stopwatch clock;
+  double fps = 0;
+  std::vector<LineSegment> boxes;
+  for (ObjectId id = 0; id < scene.object_count(); ++id) add_box(scene.entry(id).bounds, rgba8(40, 40, 40), boxes);
+  for (int frame = 0; !window.should_close(); ++frame) {
+    if (options.max_frames > 0 && frame >= options.max_frames) break;
+    const double dt = std::min(clock.lap_ms() / 1000.0, 0.25);
+    s.clock += frame == 0 ? 0.0 : dt;
+    window.poll_events();
+    if (!replay.frames.empty()) {
+      const PathFrame& f = replay.frames[size_t(frame) % replay.frames.size()];
+      apply(f, s.camera);
+      s.clock = f.time;
+    } else {
+      move(s, window, float(dt));
+    }
+    if (s.recording) s.recorded.frames.push_back({s.clock, s.camera.position, s.camera.yaw_deg, s.camera.pitch_deg});
+
+    FrameStats stats;
+    if (s.birds_eye) {
+      const Camera top = birds_eye_camera(scene.info().bounds, s.camera);
+      stats = render_frame(*strategy, *renderer, top);
+      std::vector<LineSegment> lines = boxes;
+      add_frustum(s.camera, 0.05f * glm::length(scene.info().bounds.size()), lines);
+      renderer->draw_lines(top, lines);
+    } else {
+      stats = render_frame(*strategy, *renderer, s.camera);
+    }
+    fps = fps == 0 ? 1000.0 / std::max(stats.frame_ms, 0.01) : 0.9 * fps + 100.0 / std::max(stats.frame_ms, 0.01);
+    renderer->draw_text(8, 8, overlay_text(s, stats, fps, strategy->name()), rgba8(255, 255, 255), 1.5f);
+    int w, h;
+    window.framebuffer_size(w, h);
+    renderer->present(w, h);
+    if (s.screenshot_requested) {
+      write_png(renderer->read_color(), "screenshot.png");
+      s.screenshot_requested = false;
+    }
+    window.swap_buffers();
+  }
+  if (s.recording) save_recording();
+  if (!options.screenshot_file.empty()) write_png(renderer->read_color(), options.screenshot_file);
+}
+
+}  // namespace cellwalk

@@ -1,0 +1,400 @@
+// Tests of the model importers and exporters (src/scene/*_reader.cpp, *_writer.cpp): real
+// files from the CGAL and assimp test data against counts derived independently, round trips
+// through OBJ and glTF, and the broken-file corpus in tests/data/broken.
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "cellwalk/error.hpp"
+#include "cellwalk/import.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+using test::assimp_model;
+using test::cgal_mesh;
+using test::source_path;
+using test::TempDir;
+
+struct OffHeader {
+  size_t vertices = 0, faces = 0;
+};
+
+// The counts an OFF file declares, read the simplest possible way (no comments before them).
+OffHeader off_header(const std::string& path) {
+  std::ifstream in(path);
+  std::string keyword;
+  OffHeader h;
+  in >> keyword >> h.vertices >> h.faces;
+  return h;
+}
+
+std::vector<uint8_t> bytes_of(const std::string& text) { return {text.begin(), text.end()}; }
+
+Object parse_one(ModelFormat format, const std::string& text) {
+  std::vector<Object> objects = parse_model(format, bytes_of(text), "test");
+  EXPECT_EQ(objects.size(), 1u);
+  return objects.at(0);
+}
+
+// Parses and returns the error message, failing the test if there is none or another kind.
+std::string parse_error(ModelFormat format, const std::string& text) {
+  try {
+    parse_model(format, bytes_of(text), "test");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no Error for:\n" << text;
+  return {};
+}
+
+// --- OFF -----------------------------------------------------------------------------------
+
+TEST(ImportOff, BunnyMatchesItsHeader) {
+  const std::string path = cgal_mesh("bunny00.off");
+  const OffHeader h = off_header(path);
+  ASSERT_EQ(h.vertices, 37706u);  // what the file says, so a changed file is noticed
+  std::vector<Object> objects = import_model(path, 5);
+  ASSERT_EQ(objects.size(), 1u);
+  const Object& o = objects[0];
+  EXPECT_EQ(o.id, 5u);
+  EXPECT_EQ(o.name, "bunny00");
+  EXPECT_EQ(o.mesh.vertex_count(), h.vertices);
+  EXPECT_EQ(o.mesh.triangle_count(), h.faces);  // all triangles
+  EXPECT_EQ(o.mesh.normals.size(), h.vertices);
+  EXPECT_FALSE(o.bounds.empty());
+  EXPECT_EQ(o.bounds.min, bounds_of(o.mesh).min);
+}
+
+TEST(ImportOff, ArmadilloMatchesItsHeader) {
+  const std::string path = cgal_mesh("armadillo.off");
+  const OffHeader h = off_header(path);
+  std::vector<Object> objects = import_model(path);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].mesh.vertex_count(), h.vertices);
+  EXPECT_EQ(objects[0].mesh.triangle_count(), h.faces);
+}
+
+TEST(ImportOff, ColouredOffWithComments) {
+  std::vector<Object> objects = import_model(cgal_mesh("mesh_with_colors.off"));
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].mesh.vertex_count(), 8u);
+  EXPECT_EQ(objects[0].mesh.colors.size(), 8u);
+  EXPECT_GT(objects[0].mesh.triangle_count(), 0u);
+}
+
+TEST(ImportOff, VariantsAndPolygons) {
+  // A quad becomes a fan of two triangles; NOFF normals are kept; COFF colours in [0, 1].
+  Object quad = parse_one(ModelFormat::kOff, "OFF 4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n");
+  EXPECT_EQ(quad.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  Object noff = parse_one(ModelFormat::kOff,
+                          "NOFF\n3 1\n0 0 0 0 0 -1\n1 0 0 0 0 -1\n0 1 0 0 0 -1\n3 0 1 2 255 0 0\n");
+  EXPECT_EQ(noff.mesh.normals[0], Vec3(0, 0, -1));  // from the file, not recomputed
+  Object coff = parse_one(ModelFormat::kOff,
+                          "COFF\n3 1 0\n0 0 0 1.0 0.0 0.0 1.0\n1 0 0 0 1 0 1\n0 1 0 0 0 1 1\n3 0 1 2\n");
+  EXPECT_EQ(coff.mesh.colors[0], rgba8(255, 0, 0, 255));
+}
+
+// --- PLY -----------------------------------------------------------------------------------
+
+TEST(ImportPly, CgalColouredTetraKeepsNormalsAndColours) {
+  std::vector<Object> objects = import_model(cgal_mesh("colored_tetra.ply"));
+  ASSERT_EQ(objects.size(), 1u);
+  const Mesh& m = objects[0].mesh;
+  EXPECT_EQ(m.vertex_count(), 4u);
+  EXPECT_EQ(m.triangle_count(), 4u);
+  EXPECT_EQ(m.normals.size(), 4u);
+  EXPECT_EQ(m.colors.size(), 4u);
+}
+
+TEST(ImportPly, CgalPointCloudHasVerticesAndNoTriangles) {
+  std::vector<Object> objects = import_model(cgal_mesh("b9.ply"));
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].mesh.vertex_count(), 22300u);  // "element vertex 22300"
+  EXPECT_EQ(objects[0].mesh.triangle_count(), 0u);    // "element face 0"
+}
+
+TEST(ImportPly, AssimpAsciiAndBinaryCubesAgree) {
+  // cube.ply: 8 vertices, 6 quads (uint8/int32 type names); cube_binary.ply: 12 triangles.
+  const Object ascii = import_model(assimp_model("PLY/cube.ply")).at(0);
+  const Object binary = import_model(assimp_model("PLY/cube_binary.ply")).at(0);
+  EXPECT_EQ(ascii.mesh.vertex_count(), 8u);
+  EXPECT_EQ(ascii.mesh.triangle_count(), 12u);
+  EXPECT_EQ(binary.mesh.vertex_count(), 8u);
+  EXPECT_EQ(binary.mesh.triangle_count(), 12u);
+}
+
+TEST(ImportPly, AssimpFilesWithExtraPropertiesAndFloatColours) {
+  const Object wuson = import_model(assimp_model("PLY/Wuson.ply")).at(0);
+  EXPECT_EQ(wuson.mesh.vertex_count(), 11184u);  // s t skipped, free-text header line skipped
+  EXPECT_EQ(wuson.mesh.triangle_count(), 3732u);
+  const Object colored = import_model(assimp_model("PLY/float-color.ply")).at(0);
+  ASSERT_EQ(colored.mesh.colors.size(), 3u);
+}
+
+TEST(ImportPly, TruncatedBinaryNamesTheByteOffset) {
+  // assimp's pond.0.ply declares 70051 vertices of 31 bytes but holds 69 bytes less.
+  const std::string path = assimp_model("PLY/pond.0.ply");
+  try {
+    import_model(path);
+    FAIL() << "truncated file accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + "@"), std::string::npos) << e.what();
+  }
+}
+
+std::string be32(float f) {
+  uint32_t u;
+  std::memcpy(&u, &f, 4);
+  return {char(u >> 24), char(u >> 16), char(u >> 8), char(u)};
+}
+
+TEST(ImportPly, BigEndianMatchesAscii) {
+  const std::string header =
+      "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "property uchar flags\nelement face 1\nproperty list ushort short vertex_index\n"
+      "element extra 2\nproperty list uchar double stuff\nend_header\n";
+  std::string be = "ply\nformat binary_big_endian 1.0\n" + header;
+  const float v[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0.5f};
+  for (int i = 0; i < 3; ++i) be += be32(v[3 * i]) + be32(v[3 * i + 1]) + be32(v[3 * i + 2]) + '\x07';
+  be += std::string("\0\x03\0\0\0\x01\0\x02", 8);  // face: ushort count 3, shorts 0 1 2
+  be += std::string("\0\x01", 2) + std::string(8, '\0');  // extra: empty list, one double
+  const std::string ascii = "ply\nformat ascii 1.0\n" + header +
+                            "0 0 0 7\n1 0 0 7\n0 1 0.5 7\n3 0 1 2\n0\n1 0\n";
+  const Object a = parse_one(ModelFormat::kPly, be);
+  const Object b = parse_one(ModelFormat::kPly, ascii);
+  EXPECT_EQ(a.mesh.positions, b.mesh.positions);
+  EXPECT_EQ(a.mesh.indices, b.mesh.indices);
+  EXPECT_EQ(a.mesh.positions[2], Vec3(0, 1, 0.5f));
+}
+
+// --- OBJ -----------------------------------------------------------------------------------
+
+TEST(ImportObj, AssimpModels) {
+  const Object box = import_model(assimp_model("OBJ/box.obj")).at(0);
+  EXPECT_EQ(box.mesh.vertex_count(), 8u);
+  EXPECT_EQ(box.mesh.triangle_count(), 12u);  // 6 quads
+  const Object colored = import_model(assimp_model("OBJ/cube_with_vertexcolors.obj")).at(0);
+  EXPECT_EQ(colored.mesh.colors.size(), 8u);
+  EXPECT_EQ(colored.mesh.triangle_count(), 12u);
+  const Object spider = import_model(assimp_model("OBJ/spider.obj")).at(0);  // many groups
+  EXPECT_GT(spider.mesh.triangle_count(), 1000u);
+}
+
+TEST(ImportObj, ReferenceFormsAndNegativeIndices) {
+  const Object o = parse_one(ModelFormat::kObj,
+                             "mtllib x.mtl\no a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\n"
+                             "vn 0 0 1\ng b\nusemtl m\nf 1/1 2/1/1 3//1 4\nf -4 -3 -2\n");
+  EXPECT_EQ(o.mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3, 0, 1, 2}));
+}
+
+// --- glTF ----------------------------------------------------------------------------------
+
+struct GltfCounts {
+  size_t objects = 0, triangles = 0;
+};
+
+// An oracle independent of tinygltf: reads the GLB's JSON chunk and sums, over the mesh nodes
+// of the default scene, the index counts of triangle-list primitives.
+GltfCounts glb_oracle(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::vector<char> b((std::istreambuf_iterator<char>(in)), {});
+  uint32_t json_length;
+  std::memcpy(&json_length, b.data() + 12, 4);
+  const auto doc = nlohmann::json::parse(b.begin() + 20, b.begin() + 20 + json_length);
+  GltfCounts c;
+  std::vector<int> stack = doc["scenes"][doc.value("scene", 0)]["nodes"].get<std::vector<int>>();
+  while (!stack.empty()) {
+    const auto& node = doc["nodes"][stack.back()];
+    stack.pop_back();
+    for (int child : node.value("children", std::vector<int>{})) stack.push_back(child);
+    if (!node.contains("mesh")) continue;
+    size_t triangles = 0;
+    for (const auto& p : doc["meshes"][node["mesh"].get<int>()]["primitives"])
+      if (p.value("mode", 4) == 4) triangles += doc["accessors"][p["indices"].get<int>()]["count"].get<size_t>() / 3;
+    c.objects += triangles > 0;
+    c.triangles += triangles;
+  }
+  return c;
+}
+
+TEST(ImportGltf, CylinderEngineGivesOneObjectPerMeshNode) {
+  const std::string path = assimp_model("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
+  const GltfCounts expected = glb_oracle(path);
+  std::vector<Object> objects = import_model(path, 100);
+  ASSERT_GT(objects.size(), 10u);
+  EXPECT_EQ(objects.size(), expected.objects);
+  size_t triangles = 0;
+  for (size_t i = 0; i < objects.size(); ++i) {
+    EXPECT_EQ(objects[i].id, 100 + i);
+    EXPECT_FALSE(objects[i].name.empty());
+    EXPECT_FALSE(objects[i].bounds.empty());
+    triangles += objects[i].mesh.triangle_count();
+  }
+  EXPECT_EQ(triangles, expected.triangles);
+  EXPECT_GT(triangles, 10000u);
+}
+
+TEST(ImportGltf, ExternalBinIsReadFromFilesNotFromMemory) {
+  const std::string path = assimp_model("glTF2/BoxTextured-glTF/BoxTextured.gltf");
+  std::vector<Object> objects = import_model(path);
+  ASSERT_EQ(objects.size(), 1u);
+  EXPECT_EQ(objects[0].mesh.triangle_count(), 12u);
+  // The same JSON from memory must not reach for BoxTextured0.bin on disk.
+  std::ifstream in(path, std::ios::binary);
+  std::string text((std::istreambuf_iterator<char>(in)), {});
+  EXPECT_FALSE(parse_error(ModelFormat::kGltf, text).empty());
+}
+
+TEST(ImportGltf, AssimpBrokenSamplesGiveErrors) {
+  for (const char* name : {"glTF2/IndexOutOfRange/IndexOutOfRange.gltf",
+                           "glTF2/RecursiveNodes/RecursiveNodes.gltf",
+                           "glTF2/BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb",
+                           "glTF2/MissingBin/BoxTextured.gltf"}) {
+    const std::string path = assimp_model(name);
+    EXPECT_THROW(import_model(path), Error) << path;
+  }
+}
+
+// --- exporters -----------------------------------------------------------------------------
+
+void expect_same_geometry(const Object& a, const Object& b) {
+  ASSERT_EQ(a.mesh.vertex_count(), b.mesh.vertex_count());
+  ASSERT_EQ(a.mesh.triangle_count(), b.mesh.triangle_count());
+  EXPECT_EQ(a.mesh.indices, b.mesh.indices);
+  for (size_t i = 0; i < a.mesh.positions.size(); ++i)
+    ASSERT_LT(glm::length(a.mesh.positions[i] - b.mesh.positions[i]), 1e-5f) << "vertex " << i;
+}
+
+TEST(Export, BunnyRoundTripsThroughObjGltfAndGlb) {
+  const Object bunny = import_model(cgal_mesh("bunny00.off")).at(0);
+  TempDir dir;
+  for (const char* name : {"bunny.obj", "bunny.gltf", "bunny.glb"}) {
+    const std::string path = dir.file(name);
+    if (format_of(path) == ModelFormat::kObj) {
+      ObjWriter w(path);
+      w.add(bunny);
+      w.finish();
+    } else {
+      GltfWriter w(path);
+      w.add(bunny);
+      w.finish();
+    }
+    std::vector<Object> back = import_model(path);
+    ASSERT_EQ(back.size(), 1u) << name;
+    expect_same_geometry(bunny, back[0]);
+    EXPECT_EQ(back[0].name, "bunny00") << name;
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir.file("bunny.bin")));
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_NE(entry.path().extension(), ".tmp") << entry.path();
+}
+
+TEST(Export, SeveralObjectsKeepColoursAndOrder) {
+  Object a = parse_one(ModelFormat::kOff, "COFF 3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n3 0 1 2\n");
+  a.name = "a";
+  a.color = rgba8(10, 20, 30, 255);
+  Object b = parse_one(ModelFormat::kOff, "OFF 4 2 0\n0 0 5\n1 0 5\n1 1 5\n0 1 5\n4 0 1 2 3\n");
+  b.name = "b";
+  TempDir dir;
+  GltfWriter w(dir.file("two.glb"));
+  w.add(a);
+  w.add(b);
+  w.finish();
+  std::vector<Object> back = import_model(dir.file("two.glb"));
+  ASSERT_EQ(back.size(), 2u);
+  EXPECT_EQ(back[0].name, "a");
+  EXPECT_EQ(back[0].color, a.color);
+  EXPECT_EQ(back[0].mesh.colors, a.mesh.colors);
+  expect_same_geometry(b, back[1]);
+}
+
+TEST(Export, UnfinishedWriterLeavesNoFile) {
+  TempDir dir;
+  {
+    ObjWriter w(dir.file("x.obj"));
+    w.add(parse_one(ModelFormat::kOff, "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+  }
+  EXPECT_TRUE(std::filesystem::is_empty(dir.path()));
+}
+
+// --- errors --------------------------------------------------------------------------------
+
+TEST(ImportErrors, FormatAndFileProblems) {
+  EXPECT_EQ(format_of("a/B.GLB"), ModelFormat::kGltf);
+  EXPECT_EQ(format_of("x.Obj"), ModelFormat::kObj);
+  EXPECT_THROW(format_of("x.stl"), Error);
+  TempDir dir;
+  std::filesystem::create_directory(dir.file("d.obj"));
+  for (const std::string& path : {dir.file("d.obj"), dir.file("missing.off")}) {
+    try {
+      import_model(path);
+      ADD_FAILURE() << path;
+    } catch (const Error& e) {
+      EXPECT_TRUE(std::string(e.what()).starts_with(path + ": ")) << e.what();
+    }
+  }
+}
+
+TEST(ImportErrors, TextErrorsNameTheLine) {
+  EXPECT_EQ(parse_error(ModelFormat::kOff, "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 9\n"),
+            "test:6: face uses vertex 9 but there are 3 vertices");
+  EXPECT_EQ(parse_error(ModelFormat::kObj, "v 0 0 0\n\nf 1 2 3\n"),
+            "test:3: face uses vertex 2 but 1 vertices are defined so far");
+}
+
+// Every file in the corpus must give an Error (not another exception, not a crash) whose
+// message is one line and names the file.
+TEST(ImportErrors, EveryBrokenFileGivesAnErrorNamingIt) {
+  size_t files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(source_path("tests/data/broken"))) {
+    const std::string path = entry.path().string();
+    ++files;
+    try {
+      import_model(path);
+      ADD_FAILURE() << path << " was accepted";
+    } catch (const Error& e) {
+      const std::string message = e.what();
+      EXPECT_TRUE(message.starts_with(path)) << message;
+      EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << path << ": not a cellwalk::Error: " << e.what();
+    }
+  }
+  EXPECT_GE(files, 50u);
+}
+
+// --- the command ---------------------------------------------------------------------------
+
+TEST(ImportCommand, WritesASceneAndCounts) {
+  TempDir dir;
+  const auto ok = test::run_cellwalk("import " + cgal_mesh("bunny00.off") + " " +
+                                     cgal_mesh("colored_tetra.ply") + " -o " +
+                                     dir.file("s.cwscene") + " --obj " + dir.file("s.obj"));
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_EQ(ok.output.rfind("imported 2 objects, 75412 triangles, ", 0), 0u) << ok.output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("s.cwscene")));
+  EXPECT_EQ(import_model(dir.file("s.obj")).at(0).mesh.triangle_count(), 75412u);
+
+  const auto json = test::run_cellwalk("import " + cgal_mesh("colored_tetra.ply") + " -o " +
+                                       dir.file("t.cwscene") + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  EXPECT_EQ(nlohmann::json::parse(json.output)["triangles"], 4);
+}
+
+TEST(ImportCommand, BrokenFileExitsNonZeroWithOneLineNamingIt) {
+  TempDir dir;
+  const std::string broken = source_path("tests/data/broken/truncated.off");
+  const auto r = test::run_cellwalk("import " + broken + " -o " + dir.file("s.cwscene"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+  EXPECT_NE(r.output.find(broken), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("s.cwscene")));
+}
+
+}  // namespace
+}  // namespace cellwalk

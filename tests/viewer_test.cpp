@@ -1,0 +1,118 @@
+// Runs the viewer in a real window under Xvfb and checks what it showed.
+#include <gtest/gtest.h>
+
+#define STB_IMAGE_STATIC
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+#include <cstdlib>
+#include <fstream>
+#include <set>
+#include <sys/wait.h>
+
+#include "cellwalk/scene_file.hpp"
+
+#include "cellwalk/path.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+struct Png {
+  int width = 0, height = 0;
+  std::vector<uint8_t> rgb;
+};
+
+Png load_png(const std::string& file) {
+  Png png;
+  int channels;
+  unsigned char* data = stbi_load(file.c_str(), &png.width, &png.height, &channels, 3);
+  if (data) {
+    png.rgb.assign(data, data + size_t(png.width) * png.height * 3);
+    stbi_image_free(data);
+  }
+  return png;
+}
+
+int distinct_colours(const Png& png) {
+  std::set<uint32_t> colours;
+  for (size_t i = 0; i + 2 < png.rgb.size(); i += 3)
+    colours.insert(png.rgb[i] | png.rgb[i + 1] << 8 | png.rgb[i + 2] << 16);
+  return static_cast<int>(colours.size());
+}
+
+class ViewerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
+      FAIL() << "xvfb-run is missing: run scripts/setup (package xvfb)";
+    scene_ = test::write_street_scene(dir_, 30);
+  }
+  test::CommandResult view(const std::string& args) {
+    const std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(CELLWALK_BINARY) +
+                                " view " + scene_ + " --width 320 --height 240 " + args + " 2>&1";
+    test::CommandResult r;
+    FILE* pipe = popen(command.c_str(), "r");
+    char buffer[4096];
+    size_t n;
+    while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) r.output.append(buffer, n);
+    int status = pclose(pipe);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+  }
+  test::TempDir dir_;
+  std::string scene_;
+};
+
+TEST_F(ViewerTest, WindowShowsTheSceneAndStatistics) {
+  auto r = view("--frames 3 --screenshot " + dir_.file("shot.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  Png png = load_png(dir_.file("shot.png"));
+  ASSERT_EQ(png.width, 320) << r.output;
+  ASSERT_EQ(png.height, 240);
+  // Sky alone is one colour; boxes in several colours, shading and the text overlay add many.
+  EXPECT_GT(distinct_colours(png), 20);
+}
+
+TEST_F(ViewerTest, BirdsEyeViewDiffersFromTheStreetView) {
+  ASSERT_EQ(view("--frames 2 --screenshot " + dir_.file("street.png")).exit_code, 0);
+  ASSERT_EQ(view("--frames 2 --birds-eye --screenshot " + dir_.file("bird.png")).exit_code, 0);
+  Png a = load_png(dir_.file("street.png")), b = load_png(dir_.file("bird.png"));
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  size_t differing = 0;
+  for (size_t i = 0; i < a.rgb.size(); ++i) differing += a.rgb[i] != b.rgb[i];
+  EXPECT_GT(differing, a.rgb.size() / 10);
+}
+
+TEST_F(ViewerTest, ReplayedPathIsRecordedBackFaithfully) {
+  PathParams p;
+  p.frames = 5;
+  SceneReader scene(scene_);
+  write_path(generate_path(scene.info().nav, p), dir_.file("in.path"));
+  // Replaying while recording: R cannot be pressed here, so the viewer records when given
+  // --record together with --replay.
+  auto r = view("--frames 5 --replay " + dir_.file("in.path") + " --record " + dir_.file("out.path"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  CameraPath in = read_path(dir_.file("in.path")), out = read_path(dir_.file("out.path"));
+  ASSERT_EQ(out.frames.size(), in.frames.size());
+  for (size_t i = 0; i < in.frames.size(); ++i) {
+    EXPECT_NEAR(glm::distance(in.frames[i].position, out.frames[i].position), 0.0f, 1e-4f);
+    EXPECT_NEAR(in.frames[i].yaw_deg, out.frames[i].yaw_deg, 1e-3f);
+  }
+}
+
+TEST_F(ViewerTest, NoDisplayGivesAClearError) {
+  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(CELLWALK_BINARY) + " view " +
+                              scene_ + " --frames 1 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  std::string output;
+  char buffer[4096];
+  size_t n;
+  while ((n = fread(buffer, 1, sizeof buffer, pipe)) > 0) output.append(buffer, n);
+  int status = pclose(pipe);
+  EXPECT_NE(WEXITSTATUS(status), 0);
+  EXPECT_NE(output.find("cellwalk: "), std::string::npos) << output;
+}
+
+}  // namespace
+}  // namespace cellwalk
