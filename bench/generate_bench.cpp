@@ -4,11 +4,11 @@
 //   generate_bench --benchmark_filter=BM_City1e8
 #include <benchmark/benchmark.h>
 
-#include <cstdio>
 #include <cstring>
 #include <string>
 
 #include "cellwalk/generators.hpp"
+#include "cellwalk/process_memory.hpp"
 
 namespace {
 
@@ -18,18 +18,6 @@ struct CountingSink : ObjectSink {
   SceneCounts counts;
   void add(const Object& o) override { counts.count(o); }
 };
-
-// Peak resident set (VmHWM) of this process in bytes, from /proc/self/status.
-double peak_rss_bytes() {
-  FILE* f = std::fopen("/proc/self/status", "r");
-  if (!f) return 0;
-  char line[256];
-  double kib = 0;
-  while (std::fgets(line, sizeof line, f))
-    if (std::strncmp(line, "VmHWM:", 6) == 0) kib = std::strtod(line + 6, nullptr);
-  std::fclose(f);
-  return kib * 1024;
-}
 
 template <typename Generate>
 void run(benchmark::State& state, Generate generate) {
@@ -42,9 +30,11 @@ void run(benchmark::State& state, Generate generate) {
   state.counters["objects"] = double(total.objects);
   state.counters["triangles"] = double(total.triangles);
   state.counters["bytes"] = double(total.bytes);
-  state.counters["tri/s"] = benchmark::Counter(double(total.triangles) * state.iterations(), benchmark::Counter::kIsRate);
-  state.counters["obj/s"] = benchmark::Counter(double(total.objects) * state.iterations(), benchmark::Counter::kIsRate);
-  state.counters["peak_rss"] = peak_rss_bytes();
+  state.counters["tri/s"] =
+      benchmark::Counter(double(total.triangles) * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["obj/s"] =
+      benchmark::Counter(double(total.objects) * state.iterations(), benchmark::Counter::kIsRate);
+  state.counters["peak_rss"] = double(peak_rss_bytes());
 }
 
 void BM_City(benchmark::State& state) {
@@ -53,7 +43,11 @@ void BM_City(benchmark::State& state) {
   p.landmark_fraction = double(state.range(1)) / 1000.0;
   run(state, [&](ObjectSink& s) { return generate_city(p, s); });
 }
-BENCHMARK(BM_City)->Args({2000, 0})->Args({2000, 10})->Args({20000, 10})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_City)
+    ->Args({2000, 0})
+    ->Args({2000, 10})
+    ->Args({20000, 10})
+    ->Unit(benchmark::kMillisecond);
 
 void BM_StratifiedCity(benchmark::State& state) {
   StratifiedCityParams p;

@@ -63,8 +63,12 @@ TEST(Frustum, ClassifyAgreesWithPointSamplingOracle) {
       any |= in;
       all &= in;
     }
-    if (any) EXPECT_NE(k, Containment::kOutside) << "trial " << trial;
-    if (k == Containment::kInside) EXPECT_TRUE(all) << "trial " << trial;
+    if (any) {
+      EXPECT_NE(k, Containment::kOutside) << "trial " << trial;
+    }
+    if (k == Containment::kInside) {
+      EXPECT_TRUE(all) << "trial " << trial;
+    }
     outside += k == Containment::kOutside;
     inside += k == Containment::kInside;
   }

@@ -61,6 +61,7 @@ CommandResult run_cellwalk(const std::string& args) {
 
 #include "cellwalk/random.hpp"
 #include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 
 namespace cellwalk::test {
 
@@ -113,6 +114,13 @@ std::string write_street_scene(const TempDir& dir, int count, uint64_t seed) {
   info.nav.edges = {{0, 1}};
   writer.finish(info);
   return file;
+}
+
+std::string write_street_world(const TempDir& dir, int count, uint64_t seed) {
+  const std::string scene = write_street_scene(dir, count, seed);
+  const std::string world = dir.file("street-" + std::to_string(seed) + ".cww");
+  build_world(scene, world, BuildParams{});
+  return world;
 }
 
 }  // namespace cellwalk::test

@@ -46,5 +46,7 @@ Mesh box_mesh(const Aabb& box);
 // Writes a scene of `count` boxes beside a street along the x axis (z = 0), with a
 // navigation graph down the street, and returns its path. Deterministic in `seed`.
 std::string write_street_scene(const TempDir& dir, int count, uint64_t seed = 1);
+// The same scene built into a world file (cellwalk build with default parameters).
+std::string write_street_world(const TempDir& dir, int count, uint64_t seed = 1);
 
 }  // namespace cellwalk::test

@@ -10,7 +10,7 @@
 #include <set>
 #include <sys/wait.h>
 
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 
 #include "cellwalk/path.hpp"
 #include "test_support.hpp"
@@ -46,7 +46,7 @@ class ViewerTest : public ::testing::Test {
   void SetUp() override {
     if (std::system("command -v xvfb-run >/dev/null 2>&1") != 0)
       FAIL() << "xvfb-run is missing: run scripts/setup (package xvfb)";
-    scene_ = test::write_street_scene(dir_, 30);
+    scene_ = test::write_street_world(dir_, 30);
   }
   test::CommandResult view(const std::string& args) {
     const std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(CELLWALK_BINARY) +
@@ -87,7 +87,7 @@ TEST_F(ViewerTest, BirdsEyeViewDiffersFromTheStreetView) {
 TEST_F(ViewerTest, ReplayedPathIsRecordedBackFaithfully) {
   PathParams p;
   p.frames = 5;
-  SceneReader scene(scene_);
+  World scene(scene_);
   write_path(generate_path(scene.info().nav, p), dir_.file("in.path"));
   // Replaying while recording: R cannot be pressed here, so the viewer records when given
   // --record together with --replay.

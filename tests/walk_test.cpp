@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <nlohmann/json.hpp>
 
 #include "strategy/brute.hpp"
@@ -15,7 +16,7 @@ namespace {
 // A deliberately faulty strategy: brute force that drops one object it should draw.
 class DroppingStrategy : public BruteStrategy {
  public:
-  DroppingStrategy(const SceneReader& scene, ObjectId dropped) : BruteStrategy(scene, true), dropped_(dropped) {}
+  DroppingStrategy(const World& world, ObjectId dropped) : BruteStrategy(world, {}, true), dropped_(dropped) {}
   std::string name() const override { return "dropping"; }
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override {
     BruteStrategy::select(camera, items, stats);
@@ -29,11 +30,10 @@ class DroppingStrategy : public BruteStrategy {
 class WalkTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    scene_file_ = test::write_street_scene(dir_, 40);
-    scene_ = std::make_unique<SceneReader>(scene_file_);
+    world_ = std::make_unique<World>(test::write_street_world(dir_, 40));
     PathParams p;
     p.frames = 60;
-    path_ = generate_path(scene_->info().nav, p);
+    path_ = generate_path(world_->info().nav, p);
     lens_.aspect = 160.0f / 120.0f;
     context_ = GlContext::headless();
     RenderSettings s;
@@ -42,8 +42,7 @@ class WalkTest : public ::testing::Test {
     renderer_ = std::make_unique<Renderer>(s);
   }
   test::TempDir dir_;
-  std::string scene_file_;
-  std::unique_ptr<SceneReader> scene_;
+  std::unique_ptr<World> world_;
   CameraPath path_;
   Camera lens_;
   std::unique_ptr<GlContext> context_;
@@ -51,7 +50,7 @@ class WalkTest : public ::testing::Test {
 };
 
 TEST_F(WalkTest, BruteMatchesGroundTruthExactly) {
-  BruteStrategy brute(*scene_, true), truth(*scene_, false);
+  BruteStrategy brute(*world_, {}, true), truth(*world_, {}, false);
   CompareOptions options;
   options.every = 5;
   auto frames = compare(path_, lens_, brute, truth, *renderer_, options);
@@ -64,7 +63,7 @@ TEST_F(WalkTest, BruteMatchesGroundTruthExactly) {
 
 TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
   // Drop the object most often visible in ground truth, found by rendering it.
-  BruteStrategy truth(*scene_, false);
+  BruteStrategy truth(*world_, {}, false);
   Camera cam = lens_;
   apply(path_.frames[0], cam);
   render_frame(truth, *renderer_, cam);
@@ -74,7 +73,7 @@ TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
     if (id != kBackgroundId) ++area[id];
   ASSERT_FALSE(area.empty());
   auto biggest = std::max_element(area.begin(), area.end(), [](auto& a, auto& b) { return a.second < b.second; });
-  DroppingStrategy dropping(*scene_, biggest->first - 1);
+  DroppingStrategy dropping(*world_, biggest->first - 1);
   CompareOptions options;
   options.every = 5;
   FidelitySummary s = summarize(compare(path_, lens_, dropping, truth, *renderer_, options));
@@ -84,7 +83,7 @@ TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
 }
 
 TEST_F(WalkTest, WalkMeasuresEveryFrame) {
-  BruteStrategy brute(*scene_, true);
+  BruteStrategy brute(*world_, {}, true);
   auto frames = walk(path_, lens_, brute, *renderer_);
   ASSERT_EQ(frames.size(), path_.frames.size());
   uint64_t bytes = 0;
@@ -94,8 +93,17 @@ TEST_F(WalkTest, WalkMeasuresEveryFrame) {
     EXPECT_EQ(f.triangles, 12 * f.objects);  // boxes
     bytes += f.bytes_read;
   }
-  // With an ample GPU budget each visible object is read from the file once.
-  EXPECT_EQ(bytes, scene_->bytes_read());
+  // With an ample GPU budget each visible object's level 0 is read from the file once.
+  std::set<ObjectId> seen;
+  Camera cam = lens_;
+  for (const PathFrame& f : path_.frames) {
+    apply(f, cam);
+    for (ObjectId id = 0; id < world_->object_count(); ++id)
+      if (Frustum(cam).intersects(world_->object(id).bounds)) seen.insert(id);
+  }
+  uint64_t expected = 0;
+  for (ObjectId id : seen) expected += world_->lod(id, 0).bytes;
+  EXPECT_EQ(bytes, expected);
   WalkSummary s = summarize("brute", frames);
   EXPECT_EQ(s.frames, frames.size());
   EXPECT_LE(s.p50_ms, s.p95_ms);
@@ -121,7 +129,7 @@ TEST(CompareImages, CountsDifferencesAndMissedObjects) {
 
 TEST(WalkCommand, WritesCsvAndJson) {
   test::TempDir dir;
-  const std::string scene = test::write_street_scene(dir, 20);
+  const std::string scene = test::write_street_world(dir, 20);
   auto r = test::run_cellwalk("path " + scene + " --frames 30 -o " + dir.file("p.txt"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   r = test::run_cellwalk("walk " + scene + " --path " + dir.file("p.txt") + " --width 96 --height 64 -o " +
@@ -145,7 +153,7 @@ TEST(WalkCommand, WritesCsvAndJson) {
 
 TEST(WalkCommand, BadPathFileGivesOneClearLine) {
   test::TempDir dir;
-  const std::string scene = test::write_street_scene(dir, 4);
+  const std::string scene = test::write_street_world(dir, 4);
   std::ofstream(dir.file("p.txt")) << "# cellwalk path 1\n0 1 2\n";
   auto r = test::run_cellwalk("walk " + scene + " --path " + dir.file("p.txt"));
   EXPECT_NE(r.exit_code, 0);

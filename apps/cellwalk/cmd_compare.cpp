@@ -4,7 +4,7 @@
 #include <filesystem>
 
 #include "cellwalk/atomic_file.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 #include "cellwalk/walk.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
@@ -16,14 +16,14 @@ void register_compare(CLI::App& root) {
   auto* cmd = root.add_subcommand(
       "compare", "Render every k-th frame with a strategy and with ground truth; report the differences");
   struct Args {
-    std::string scene, path, strategy = "brute", out = "out/compare";
+    std::string world, path, strategy = "brute", out = "out/compare";
     CompareOptions options;
     double budget_mib = 0;
     bool json = false;
     LensOptions lens;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("scene", args->scene, "Scene file (.cwscene)")->required();
+  cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
   cmd->add_option("--path", args->path, "Camera path file")->required();
   cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
   cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(CLI::PositiveNumber);
@@ -33,12 +33,12 @@ void register_compare(CLI::App& root) {
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   args->lens.add_to(*cmd);
   cmd->callback([args] {
-    SceneReader scene(args->scene);
+    World world(args->world);
     CameraPath path = read_path(args->path);
     StrategyOptions options;
     options.memory_budget_bytes = static_cast<uint64_t>(args->budget_mib * 1024 * 1024);
-    auto strategy = make_strategy(args->strategy, scene, options);
-    auto truth = make_strategy("ground-truth", scene, {});
+    auto strategy = make_strategy(args->strategy, world, options);
+    auto truth = make_strategy("ground-truth", world, {});
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());
     std::filesystem::create_directories(args->out);

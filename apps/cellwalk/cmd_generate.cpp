@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <functional>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/generators.hpp"
@@ -58,16 +57,16 @@ void write_world(const std::string& what, const Output& out, uint64_t expected_o
   const double seconds = clock.ms() / 1000.0;
   const SceneCounts& c = counter.counts;
   if (out.json) {
-    const nlohmann::ordered_json j = {{"generator", what},       {"output", out.scene},
-                                      {"objects", c.objects},    {"triangles", c.triangles},
-                                      {"vertices", c.vertices},  {"bytes", c.bytes},
-                                      {"nav_nodes", nav_nodes},  {"nav_edges", nav_edges},
-                                      {"seconds", seconds}};
+    const nlohmann::ordered_json j = {
+        {"generator", what},        {"output", out.scene},    {"objects", c.objects},
+        {"triangles", c.triangles}, {"vertices", c.vertices}, {"bytes", c.bytes},
+        {"nav_nodes", nav_nodes},   {"nav_edges", nav_edges}, {"seconds", seconds}};
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("%s: %llu objects, %llu triangles, %llu bytes (raw), written to %s in %.2f s\n", what.c_str(),
-              static_cast<unsigned long long>(c.objects), static_cast<unsigned long long>(c.triangles),
+  std::printf("%s: %llu objects, %llu triangles, %llu bytes (raw), written to %s in %.2f s\n",
+              what.c_str(), static_cast<unsigned long long>(c.objects),
+              static_cast<unsigned long long>(c.triangles),
               static_cast<unsigned long long>(c.bytes), out.scene.c_str(), seconds);
 }
 
@@ -76,24 +75,30 @@ CLI::App* add_generator(CLI::App& generate, const std::string& name, const std::
   CLI::App* cmd = generate.add_subcommand(name, help);
   cmd->add_option("-o,--output", out->scene, "Scene file to write (.cwscene)")->required();
   cmd->add_option("--obj", out->obj, "Also write the objects as Wavefront OBJ");
-  cmd->add_option("--gltf", out->gltf, "Also write the objects as glTF 2.0 (.gltf + .bin, or .glb)");
+  cmd->add_option("--gltf", out->gltf,
+                  "Also write the objects as glTF 2.0 (.gltf + .bin, or .glb)");
   cmd->add_flag("--json", out->json, "Print the counts as JSON");
   return cmd;
 }
 
 void register_city(CLI::App& generate, std::shared_ptr<Output> out) {
   auto p = std::make_shared<CityParams>();
-  CLI::App* cmd = add_generator(generate, "city",
-                                "HDoV thesis §3.3 cityscape: houses, towers and landmark bunnies on a street grid", out);
+  CLI::App* cmd = add_generator(
+      generate, "city",
+      "HDoV thesis §3.3 cityscape: houses, towers and landmark bunnies on a street grid", out);
   cmd->add_option("--objects", p->objects, "Number of objects")->capture_default_str();
-  cmd->add_option("--landmark-fraction", p->landmark_fraction, "Fraction of objects that are landmarks")
+  cmd->add_option("--landmark-fraction", p->landmark_fraction,
+                  "Fraction of objects that are landmarks")
       ->capture_default_str();
-  cmd->add_option("--extent", p->extent, "Side of the square city in metres (0: derived from --objects)")
+  cmd->add_option("--extent", p->extent,
+                  "Side of the square city in metres (0: derived from --objects)")
       ->capture_default_str();
   cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str();
-  cmd->add_option("--landmark-mesh", p->landmark_mesh, "Landmark model (OFF/PLY/OBJ/glTF; default: the CGAL bunny)");
+  cmd->add_option("--landmark-mesh", p->landmark_mesh,
+                  "Landmark model (OFF/PLY/OBJ/glTF; default: the CGAL bunny)");
   cmd->callback([p, out] {
-    write_world("city", *out, p->objects, [&](ObjectSink& sink) { return generate_city(*p, sink); });
+    write_world("city", *out, p->objects,
+                [&](ObjectSink& sink) { return generate_city(*p, sink); });
   });
 }
 
@@ -101,15 +106,21 @@ void register_stratified_city(CLI::App& generate, std::shared_ptr<Output> out) {
   auto p = std::make_shared<StratifiedCityParams>();
   CLI::App* cmd = add_generator(generate, "stratified-city",
                                 "Random city of the stratified-rendering thesis, Appendix A", out);
-  cmd->add_option("--max-height", p->max_height, "Maximum building height, metres")->capture_default_str();
-  cmd->add_option("--block-length", p->block_length, "Block length (X), metres")->capture_default_str();
-  cmd->add_option("--block-width", p->block_width, "Block width (Z), metres")->capture_default_str();
-  cmd->add_option("--rows", p->rows_per_block, "Most building rows per block")->capture_default_str();
-  cmd->add_option("--columns", p->columns_per_block, "Most building columns per row")->capture_default_str();
+  cmd->add_option("--max-height", p->max_height, "Maximum building height, metres")
+      ->capture_default_str();
+  cmd->add_option("--block-length", p->block_length, "Block length (X), metres")
+      ->capture_default_str();
+  cmd->add_option("--block-width", p->block_width, "Block width (Z), metres")
+      ->capture_default_str();
+  cmd->add_option("--rows", p->rows_per_block, "Most building rows per block")
+      ->capture_default_str();
+  cmd->add_option("--columns", p->columns_per_block, "Most building columns per row")
+      ->capture_default_str();
   cmd->add_option("--blocks-x", p->blocks_x, "Blocks along X")->capture_default_str();
   cmd->add_option("--blocks-z", p->blocks_z, "Blocks along Z")->capture_default_str();
   cmd->add_option("--street-width", p->street_width, "Street width, metres")->capture_default_str();
-  cmd->add_option("--street-height", p->street_height, "Street surface height, metres")->capture_default_str();
+  cmd->add_option("--street-height", p->street_height, "Street surface height, metres")
+      ->capture_default_str();
   cmd->add_option("--curb-width", p->curb_width, "Curb width, metres")->capture_default_str();
   cmd->add_option("--curb-height", p->curb_height, "Curb height, metres")->capture_default_str();
   cmd->add_option("--tree-spacing", p->tree_spacing, "Distance between trees, metres (0: no trees)")
@@ -123,10 +134,12 @@ void register_stratified_city(CLI::App& generate, std::shared_ptr<Output> out) {
 
 void register_plant(CLI::App& generate, std::shared_ptr<Output> out) {
   auto p = std::make_shared<PlantParams>();
-  CLI::App* cmd = add_generator(generate, "plant", "Industrial plant of process units between aisles", out);
+  CLI::App* cmd =
+      add_generator(generate, "plant", "Industrial plant of process units between aisles", out);
   cmd->add_option("--units-x", p->units_x, "Process units along X")->capture_default_str();
   cmd->add_option("--units-z", p->units_z, "Process units along Z")->capture_default_str();
-  cmd->add_option("--detail", p->detail, "Scales tessellation and part counts, (0, 16]")->capture_default_str();
+  cmd->add_option("--detail", p->detail, "Scales tessellation and part counts, (0, 16]")
+      ->capture_default_str();
   cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str();
   cmd->callback([p, out] {
     write_world("plant", *out, 0, [&](ObjectSink& sink) { return generate_plant(*p, sink); });
@@ -135,7 +148,8 @@ void register_plant(CLI::App& generate, std::shared_ptr<Output> out) {
 
 void register_grid(CLI::App& generate, std::shared_ptr<Output> out) {
   auto p = std::make_shared<GridParams>();
-  CLI::App* cmd = add_generator(generate, "grid", "Copies of one model on a lattice with lanes between", out);
+  CLI::App* cmd =
+      add_generator(generate, "grid", "Copies of one model on a lattice with lanes between", out);
   cmd->add_option("--mesh", p->mesh, "Model to copy (OFF/PLY/OBJ/glTF)")->required();
   cmd->add_option("--nx", p->nx, "Copies along X")->capture_default_str();
   cmd->add_option("--ny", p->ny, "Layers along Y")->capture_default_str();

@@ -3,6 +3,7 @@
 
 #include "cellwalk/path.hpp"
 #include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {
@@ -14,7 +15,7 @@ void register_path(CLI::App& root) {
     PathParams params;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("scene", args->scene, "Scene file (.cwscene)")->required();
+  cmd->add_option("file", args->scene, "World file (.cww) or scene file (.cwscene)")->required();
   cmd->add_option("-o,--output", args->out, "Path file to write")->required();
   cmd->add_option("--kind", args->kind,
                   "Session kind: normal, slow, fast, turning, backward, back-and-forth, random")
@@ -24,8 +25,8 @@ void register_path(CLI::App& root) {
   cmd->add_option("--seed", args->params.seed, "Random seed")->capture_default_str();
   cmd->callback([args] {
     args->params.kind = parse_session_kind(args->kind);
-    SceneReader scene(args->scene);
-    CameraPath path = generate_path(scene.info().nav, args->params);
+    const NavGraph nav = is_world_file(args->scene) ? World(args->scene).info().nav : SceneReader(args->scene).info().nav;
+    CameraPath path = generate_path(nav, args->params);
     write_path(path, args->out);
     std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(),
                 path.frames.back().time, args->out.c_str());

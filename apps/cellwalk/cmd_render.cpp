@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "cellwalk/error.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 #include "cellwalk/walk.hpp"
 #include "commands.hpp"
 #include "lens_options.hpp"
@@ -12,19 +12,19 @@ namespace cellwalk::app {
 void register_render(CLI::App& root) {
   auto* cmd = root.add_subcommand("render", "Render one view of a scene to a PNG");
   struct Args {
-    std::string scene, path, out, strategy = "brute";
+    std::string world, path, out, strategy = "brute";
     int frame = 0;
     LensOptions lens;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("scene", args->scene, "Scene file (.cwscene)")->required();
+  cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
   cmd->add_option("-o,--output", args->out, "PNG to write")->required();
   cmd->add_option("--path", args->path, "Camera path; without it, an overview from above the scene");
   cmd->add_option("--frame", args->frame, "Frame of the path to render")->capture_default_str();
   cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
   args->lens.add_to(*cmd);
   cmd->callback([args] {
-    SceneReader scene(args->scene);
+    World world(args->world);
     Camera camera = args->lens.lens();
     if (!args->path.empty()) {
       CameraPath path = read_path(args->path);
@@ -34,7 +34,7 @@ void register_render(CLI::App& root) {
       apply(path.frames[size_t(args->frame)], camera);
     } else {
       // From above one corner, looking across the scene at 35 degrees down.
-      const Aabb& b = scene.info().bounds;
+      const Aabb& b = world.info().bounds;
       const float span = glm::length(b.size());
       camera.position = Vec3(b.max.x, b.max.y + 0.35f * span, b.max.z) + Vec3(0.1f, 0, 0.1f) * span;
       camera.yaw_deg = 45.0f;
@@ -42,7 +42,7 @@ void register_render(CLI::App& root) {
       camera.far_plane = 4.0f * span;
       camera.near_plane = span * 1e-4f;
     }
-    auto strategy = make_strategy(args->strategy, scene, {});
+    auto strategy = make_strategy(args->strategy, world, {});
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());
     FrameStats stats = render_frame(*strategy, renderer, camera);

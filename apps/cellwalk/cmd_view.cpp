@@ -14,7 +14,7 @@ void register_view(CLI::App& root) {
     ViewerOptions options;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("scene", args->scene, "Scene file (.cwscene)")->required();
+  cmd->add_option("world", args->scene, "World file (.cww)")->required();
   cmd->add_option("--strategy", args->options.strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
   cmd->add_option("--width", args->options.width, "Window width")->capture_default_str();
   cmd->add_option("--height", args->options.height, "Window height")->capture_default_str();
@@ -25,8 +25,8 @@ void register_view(CLI::App& root) {
   cmd->add_option("--screenshot", args->options.screenshot_file, "Write the last frame to this PNG on exit");
   cmd->add_flag("--birds-eye", args->options.birds_eye, "Start in the bird's-eye view");
   cmd->callback([args] {
-    SceneReader scene(args->scene);
-    run_viewer(scene, args->options);
+    World world(args->scene);
+    run_viewer(world, args->options);
   });
 }
 

@@ -2,7 +2,7 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 #include "cellwalk/walk.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
@@ -13,13 +13,13 @@ namespace cellwalk::app {
 void register_walk(CLI::App& root) {
   auto* cmd = root.add_subcommand("walk", "Replay a camera path with one strategy and measure every frame");
   struct Args {
-    std::string scene, path, strategy = "brute", out = "out/walk";
+    std::string world, path, strategy = "brute", out = "out/walk";
     double budget_mib = 0;
     bool json = false;
     LensOptions lens;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("scene", args->scene, "Scene file (.cwscene)")->required();
+  cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
   cmd->add_option("--path", args->path, "Camera path file (cellwalk path)")->required();
   cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
   cmd->add_option("-o,--output", args->out, "Output folder for <strategy>.csv and <strategy>.json")->capture_default_str();
@@ -27,11 +27,11 @@ void register_walk(CLI::App& root) {
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   args->lens.add_to(*cmd);
   cmd->callback([args] {
-    SceneReader scene(args->scene);
+    World world(args->world);
     CameraPath path = read_path(args->path);
     StrategyOptions options;
     options.memory_budget_bytes = static_cast<uint64_t>(args->budget_mib * 1024 * 1024);
-    auto strategy = make_strategy(args->strategy, scene, options);
+    auto strategy = make_strategy(args->strategy, world, options);
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());
     Progress progress("walk " + args->strategy, path.frames.size());
@@ -39,6 +39,7 @@ void register_walk(CLI::App& root) {
                        [&](size_t done, size_t) { progress.update(done); });
     progress.finish();
     WalkSummary summary = summarize(strategy->name(), frames);
+    summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
     std::filesystem::create_directories(args->out);
     const std::string stem = args->out + "/" + strategy->name();
     write_frames_csv(frames, stem + ".csv");
@@ -48,12 +49,14 @@ void register_walk(CLI::App& root) {
       return;
     }
     std::printf("walk %s: %zu frames, frame time mean %.2f ms (sd %.2f, p95 %.2f), %.0f triangles/frame,\n"
-                "  split query %.2f / io %.2f / decode %.2f / render %.2f ms, %.1f MiB read, peak resident %.1f MiB\n"
+                "  split query %.2f / io %.2f / decode %.2f / render %.2f ms, %.1f MiB read, peak resident %.1f MiB%s\n"
                 "  wrote %s.csv and %s.json\n",
                 summary.strategy.c_str(), summary.frames, summary.mean_ms, summary.stddev_ms, summary.p95_ms,
                 summary.frames ? double(summary.total_triangles) / summary.frames : 0.0, summary.mean_query_ms,
                 summary.mean_io_ms, summary.mean_decode_ms, summary.mean_render_ms,
-                summary.total_bytes_read / 1048576.0, summary.peak_resident_bytes / 1048576.0, stem.c_str(),
+                summary.total_bytes_read / 1048576.0, summary.peak_resident_bytes / 1048576.0,
+                options.memory_budget_bytes ? (" (budget " + std::to_string(options.memory_budget_bytes >> 20) + " MiB)").c_str() : "",
+                stem.c_str(),
                 stem.c_str());
   });
 }

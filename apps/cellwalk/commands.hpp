@@ -14,5 +14,7 @@ void register_compare(CLI::App& root);
 void register_view(CLI::App& root);
 void register_info(CLI::App& root);
 void register_render(CLI::App& root);
+void register_build(CLI::App& root);
+void register_verify(CLI::App& root);
 
 }  // namespace cellwalk::app

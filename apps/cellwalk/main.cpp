@@ -10,7 +10,9 @@ int main(int argc, char** argv) {
   root.set_version_flag("--version", "cellwalk 0.1.0");
   cellwalk::app::register_generate(root);
   cellwalk::app::register_import(root);
+  cellwalk::app::register_build(root);
   cellwalk::app::register_info(root);
+  cellwalk::app::register_verify(root);
   cellwalk::app::register_path(root);
   cellwalk::app::register_walk(root);
   cellwalk::app::register_compare(root);

@@ -22,6 +22,13 @@ class AtomicFile {
     write(std::span(reinterpret_cast<const uint8_t*>(text.data()), text.size()));
   }
   uint64_t size() const { return written_; }  // bytes written so far = offset of the next
+  // Replaces bytes already written at [offset, offset + bytes.size()), e.g. a header whose
+  // fields are known only at the end. REQUIRES: offset + bytes.size() <= size().
+  void overwrite(uint64_t offset, std::span<const uint8_t> bytes);
+  // Writes here everything written to `other` so far, e.g. a part staged in a scratch file
+  // (never committed, so removed by its destructor) because a header before it could only be
+  // written at the end. `other` is left as it was.
+  void append_contents_of(AtomicFile& other);
   void commit();
   const std::string& path() const { return path_; }
 

@@ -20,7 +20,8 @@ struct FrameStats {
   uint64_t bytes_read = 0;
   uint64_t cache_hits = 0;
   uint64_t cache_misses = 0;
-  uint64_t resident_bytes = 0;  // geometry held in memory at the end of the frame
+  uint64_t resident_bytes = 0;  // the strategy's memory (under its budget) at the end of the frame
+  uint64_t gpu_bytes = 0;       // the renderer's buffer cache (under its own budget)
   bool stall = false;           // the frame waited for data it needed
 };
 
@@ -31,7 +32,9 @@ struct WalkSummary {
   double mean_query_ms = 0, mean_io_ms = 0, mean_decode_ms = 0, mean_render_ms = 0;
   uint64_t total_triangles = 0, total_bytes_read = 0, cache_hits = 0, cache_misses = 0;
   uint64_t stalls = 0;
-  uint64_t peak_resident_bytes = 0;
+  uint64_t peak_resident_bytes = 0;  // the strategy's exact peak (set by the caller), or the
+                                     // largest per-frame value
+  uint64_t peak_gpu_bytes = 0;
 };
 
 WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>& frames);

@@ -10,7 +10,7 @@
 
 namespace cellwalk {
 
-// A grid cityscape after the HDoV thesis §3.3: blocks between streets 10–30 m apart, buildings
+// A grid cityscape after the HDoV thesis §3.3: streets 10–30 m wide, lots 10–30 m apart, buildings
 // of several designs (houses and towers of a few hundred to ~1,800 triangles) and high-detail
 // landmark objects (a ~70k-triangle bunny) repeated with random transforms.
 struct CityParams {
@@ -48,7 +48,8 @@ SceneInfo generate_plant(const PlantParams& params, ObjectSink& sink);
 struct GridParams {
   std::string mesh;
   int nx = 10, ny = 1, nz = 10;
-  double spacing = 0.0;  // 0 = 1.5 × the mesh's largest extent
+  // The mesh is first scaled so its largest extent is 1; spacing is in those units (0 = 1.5).
+  double spacing = 0.0;
   uint64_t seed = 1;     // for per-instance colours
 };
 SceneInfo generate_grid(const GridParams& params, ObjectSink& sink);

@@ -10,7 +10,7 @@
 #include "cellwalk/camera.hpp"
 #include "cellwalk/frame_stats.hpp"
 #include "cellwalk/renderer.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 
 namespace cellwalk {
 
@@ -28,19 +28,22 @@ class Strategy {
   // the data is not available this frame (the frame then counts as a stall).
   virtual const Mesh* mesh(const DrawItem& item, FrameStats& stats) = 0;
 
-  // Bytes of geometry and index data the strategy holds in memory now.
+  // Bytes the strategy holds in memory now (geometry, index, visibility data): what its memory
+  // budget bounds.
   virtual uint64_t resident_bytes() const = 0;
+  // The largest resident_bytes() has been, exactly (not sampled per frame).
+  virtual uint64_t peak_resident_bytes() const = 0;
 };
 
 struct StrategyOptions {
-  uint64_t memory_budget_bytes = 0;  // 0 = unbounded
+  uint64_t memory_budget_bytes = 0;  // 0 = unbounded; never exceeded
 };
 
 // Names accepted by make_strategy, for --help and errors.
 std::vector<std::string> strategy_names();
 
-// REQUIRES: `scene` outlives the strategy. Throws Error on an unknown name.
-std::unique_ptr<Strategy> make_strategy(const std::string& name, const SceneReader& scene,
+// REQUIRES: `world` outlives the strategy. Throws Error on an unknown name.
+std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& world,
                                         const StrategyOptions& options);
 
 }  // namespace cellwalk

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/world.hpp"
 
 namespace cellwalk {
 
@@ -23,6 +23,6 @@ struct ViewerOptions {
 // Runs until the window is closed, Escape is pressed or max_frames is reached.
 // Keys: W/A/S/D move, Q/E down/up (fly), mouse drag looks, Shift runs, F walk/fly,
 // B bird's-eye view, R starts/stops recording, P saves a screenshot, Esc quits.
-void run_viewer(const SceneReader& scene, const ViewerOptions& options);
+void run_viewer(const World& world, const ViewerOptions& options);
 
 }  // namespace cellwalk

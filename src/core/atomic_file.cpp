@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -29,7 +30,8 @@ void sync_directory_of(const std::string& path) {
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
   if (std::filesystem::is_directory(path_)) fail(path_, "is a directory, expected a file name");
   temp_ = path_ + ".tmp." + std::to_string(::getpid());
-  fd_ = ::open(temp_.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // Read and write: append_contents_of() reads a scratch file back.
+  fd_ = ::open(temp_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) fail(path_, std::string("cannot create: ") + std::strerror(errno));
   buffer_.reserve(kBufferBytes);
 }
@@ -50,6 +52,33 @@ void AtomicFile::write(std::span<const uint8_t> bytes) {
     return;
   }
   buffer_.append(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+}
+
+void AtomicFile::overwrite(uint64_t offset, std::span<const uint8_t> bytes) {
+  if (offset + bytes.size() > written_) fail(path_, "internal: overwrite past the end of the file");
+  flush();
+  size_t done = 0;
+  while (done < bytes.size()) {
+    ssize_t n = ::pwrite(fd_, bytes.data() + done, bytes.size() - done, static_cast<off_t>(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) fail(path_, std::string("write failed: ") + std::strerror(n < 0 ? errno : EIO));
+    done += static_cast<size_t>(n);
+  }
+}
+
+void AtomicFile::append_contents_of(AtomicFile& other) {
+  other.flush();
+  std::string chunk(kBufferBytes, '\0');
+  for (uint64_t offset = 0; offset < other.written_;) {
+    const uint64_t left = other.written_ - offset;
+    const auto want = static_cast<size_t>(std::min<uint64_t>(chunk.size(), left));
+    ssize_t n = ::pread(other.fd_, chunk.data(), want, static_cast<off_t>(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0)
+      fail(other.path_, std::string("read back failed: ") + std::strerror(n < 0 ? errno : EIO));
+    write(std::string_view(chunk.data(), static_cast<size_t>(n)));
+    offset += static_cast<uint64_t>(n);
+  }
 }
 
 void AtomicFile::flush() {

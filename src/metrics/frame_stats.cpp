@@ -38,6 +38,7 @@ WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>
     s.cache_misses += f.cache_misses;
     s.stalls += f.stall ? 1 : 0;
     s.peak_resident_bytes = std::max(s.peak_resident_bytes, f.resident_bytes);
+    s.peak_gpu_bytes = std::max(s.peak_gpu_bytes, f.gpu_bytes);
   }
   const double n = static_cast<double>(frames.size());
   double sum = 0;
@@ -61,14 +62,14 @@ WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>
 void write_frames_csv(const std::vector<FrameStats>& frames, const std::string& file) {
   std::ostringstream out;
   out << "frame,time,frame_ms,query_ms,io_ms,decode_ms,render_ms,triangles,objects,bytes_read,"
-         "cache_hits,cache_misses,resident_bytes,stall\n";
+         "cache_hits,cache_misses,resident_bytes,gpu_bytes,stall\n";
   out.setf(std::ios::fixed);
   out.precision(3);
   for (const FrameStats& f : frames)
     out << f.frame << ',' << f.time << ',' << f.frame_ms << ',' << f.query_ms << ',' << f.io_ms << ','
         << f.decode_ms << ',' << f.render_ms << ',' << f.triangles << ',' << f.objects << ','
         << f.bytes_read << ',' << f.cache_hits << ',' << f.cache_misses << ',' << f.resident_bytes
-        << ',' << (f.stall ? 1 : 0) << '\n';
+        << ',' << f.gpu_bytes << ',' << (f.stall ? 1 : 0) << '\n';
   write_file_atomically(file, out.str());
 }
 
@@ -85,7 +86,8 @@ std::string to_json(const WalkSummary& s) {
       {"cache_hits", s.cache_hits},
       {"cache_misses", s.cache_misses},
       {"stalls", s.stalls},
-      {"peak_resident_bytes", s.peak_resident_bytes}};
+      {"peak_resident_bytes", s.peak_resident_bytes},
+      {"peak_gpu_bytes", s.peak_gpu_bytes}};
   return j.dump(2);
 }
 

@@ -114,8 +114,8 @@ std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, 
 
 }  // namespace
 
-void run_viewer(const SceneReader& scene, const ViewerOptions& options) {
-  Window window(options.width, options.height, "cellwalk — " + scene.path(), options.max_frames == 0);
+void run_viewer(const World& scene, const ViewerOptions& options) {
+  Window window(options.width, options.height, "cellwalk — " + scene.file().path(), options.max_frames == 0);
   auto strategy = make_strategy(options.strategy, scene, {});
   int fb_width, fb_height;
   window.framebuffer_size(fb_width, fb_height);
@@ -176,7 +176,7 @@ void run_viewer(const SceneReader& scene, const ViewerOptions& options) {
   Stopwatch clock;
   double fps = 0;
   std::vector<LineSegment> boxes;
-  for (ObjectId id = 0; id < scene.object_count(); ++id) add_box(scene.entry(id).bounds, rgba8(40, 40, 40), boxes);
+  for (ObjectId id = 0; id < scene.object_count(); ++id) add_box(scene.object(id).bounds, rgba8(40, 40, 40), boxes);
   for (int frame = 0; !window.should_close(); ++frame) {
     if (options.max_frames > 0 && frame >= options.max_frames) break;
     const double dt = std::min(clock.lap_ms() / 1000.0, 0.25);

@@ -26,7 +26,8 @@ FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& ca
   stats.objects = rs.objects;
   stats.cache_hits += rs.gpu_hits;
   stats.stall = stats.stall || unavailable > 0;
-  stats.resident_bytes = strategy.resident_bytes() + rs.gpu_resident_bytes;
+  stats.resident_bytes = strategy.resident_bytes();
+  stats.gpu_bytes = rs.gpu_resident_bytes;
   stats.frame_ms = frame_watch.ms();
   return stats;
 }

@@ -94,7 +94,8 @@ Mesh tower1() {  // three set-back slabs with floor lines, window strips and a m
     a.add(shapes::box({widths[s], heights[s], widths[s]}), Vec3(0, y, 0));
     const int floors = static_cast<int>(heights[s] / 3.5f);
     for (int f = 1; f <= floors; ++f)
-      a.add(shapes::box({widths[s] + 0.4f, 0.3f, widths[s] + 0.4f}), Vec3(0, y + 3.5f * f - 0.3f, 0));
+      a.add(shapes::box({widths[s] + 0.4f, 0.3f, widths[s] + 0.4f}),
+            Vec3(0, y + 3.5f * f - 0.3f, 0));
     Assembly windows;
     add_windows(windows, widths[s], widths[s], 0, heights[s], 1, strips[s]);
     a.add(windows.take(), Vec3(0, y, 0));
@@ -223,8 +224,8 @@ Layout layout_for(const CityParams& p) {
   if (p.extent > 0.0) {
     Layout l = layout(p.extent, p.seed);
     if (l.lots < p.objects)
-      fail("city", "extent " + std::to_string(p.extent) + " m holds only " + std::to_string(l.lots) +
-                       " lots for " + std::to_string(p.objects) +
+      fail("city", "extent " + std::to_string(p.extent) + " m holds only " +
+                       std::to_string(l.lots) + " lots for " + std::to_string(p.objects) +
                        " objects; use a larger --extent or 0 to derive it");
     return l;
   }
@@ -256,8 +257,8 @@ NavGraph street_graph(const std::vector<Street>& xs, const std::vector<Street>& 
 void place_on_lot(Mesh& mesh, const Aabb& model_bounds, Vec3 scale, float yaw, Vec3 centre,
                   double lot_w, double lot_d) {
   Aabb turned = transformed(model_bounds, shapes::place(Vec3(0), yaw, scale));
-  const double fit = std::min({1.0, (lot_w - 2 * kSetback) / turned.size().x,
-                               (lot_d - 2 * kSetback) / turned.size().z});
+  const double fit = std::min(
+      {1.0, (lot_w - 2 * kSetback) / turned.size().x, (lot_d - 2 * kSetback) / turned.size().z});
   scale.x *= static_cast<float>(fit);
   scale.z *= static_cast<float>(fit);
   turned = transformed(model_bounds, shapes::place(Vec3(0), yaw, scale));
@@ -271,7 +272,8 @@ struct Model {
 };
 
 Model landmark_model(const CityParams& p) {
-  const std::string file = p.landmark_mesh.empty() ? data_path("cgal/meshes/bunny00.off") : p.landmark_mesh;
+  const std::string file =
+      p.landmark_mesh.empty() ? data_path("cgal/meshes/bunny00.off") : p.landmark_mesh;
   Mesh unit = shapes::unit_model(import_model(file), file);
   const Aabb bounds = bounds_of(unit);
   return {std::move(unit), bounds};
@@ -316,7 +318,8 @@ SceneInfo generate_city(const CityParams& params, ObjectSink& sink) {
     const Aabb b = bounds_of(m);
     designs.push_back({std::move(m), b});
   }
-  const uint64_t landmarks = static_cast<uint64_t>(std::llround(params.landmark_fraction * params.objects));
+  const uint64_t landmarks =
+      static_cast<uint64_t>(std::llround(params.landmark_fraction * params.objects));
   const Model landmark = landmarks > 0 ? landmark_model(params) : Model{};
 
   Random rng(params.seed);
@@ -338,8 +341,8 @@ SceneInfo generate_city(const CityParams& params, ObjectSink& sink) {
             // 3–20 m tall at any heading: the thesis's bunnies "with random transforms".
             mesh = landmark.mesh;
             const float size = static_cast<float>(r.uniform(3.0, 20.0));
-            place_on_lot(mesh, landmark.bounds, Vec3(size), static_cast<float>(r.uniform(0, 2 * kPi)),
-                         centre, b.lot_w, b.lot_d);
+            place_on_lot(mesh, landmark.bounds, Vec3(size),
+                         static_cast<float>(r.uniform(0, 2 * kPi)), centre, b.lot_w, b.lot_d);
             name = "landmark/" + std::to_string(out.count());
             out.emit(name, vary(rgba8(200, 180, 150), r), mesh);
             continue;
@@ -348,7 +351,8 @@ SceneInfo generate_city(const CityParams& params, ObjectSink& sink) {
           const Design& design = kDesigns[d];
           mesh = designs[d].mesh;
           const float plan = static_cast<float>(r.uniform(0.85, 1.15));
-          const float height = static_cast<float>(r.uniform(design.min_height_scale, design.max_height_scale));
+          const float height =
+              static_cast<float>(r.uniform(design.min_height_scale, design.max_height_scale));
           // Quarter turns keep the buildings square to the streets.
           place_on_lot(mesh, designs[d].bounds, Vec3(plan, height, plan),
                        static_cast<float>(r.integer(0, 3)) * kPi / 2, centre, b.lot_w, b.lot_d);

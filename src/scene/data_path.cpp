@@ -9,7 +9,8 @@ namespace cellwalk {
 
 std::string data_path(const std::string& relative) {
   const char* root = std::getenv("CELLWALK_DATA");
-  const std::string base = root && *root ? std::string(root) : std::string(CELLWALK_SOURCE_DIR) + "/data";
+  const std::string base =
+      root && *root ? std::string(root) : std::string(CELLWALK_SOURCE_DIR) + "/data";
   return base + "/" + relative;
 }
 

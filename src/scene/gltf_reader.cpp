@@ -9,6 +9,7 @@
 #define TINYGLTF_NO_EXTERNAL_IMAGE
 #include <tiny_gltf.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <glm/gtc/matrix_transform.hpp>
@@ -239,8 +240,7 @@ Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
     const AccessorView cv = view_of(m, c, where);
     if (cv.components < 3 || cv.count != pos.count) fail(where, "COLOR_0 does not match POSITION");
     auto ch = [&cv](size_t i, int k) {
-      const double v = k < cv.components ? cv.get(i, k) : 1.0;
-      return static_cast<uint8_t>(std::clamp(v, 0.0, 1.0) * 255.0 + 0.5);
+      return color_channel(k < cv.components ? cv.get(i, k) : 1.0, 1.0);
     };
     mesh.colors.resize(cv.count);
     for (size_t i = 0; i < cv.count; ++i) mesh.colors[i] = rgba8(ch(i, 0), ch(i, 1), ch(i, 2), ch(i, 3));
@@ -270,7 +270,7 @@ Rgba8 material_color(const tinygltf::Model& m, const tinygltf::Mesh& mesh) {
     if (p.material < 0 || static_cast<size_t>(p.material) >= m.materials.size()) continue;
     const std::vector<double>& f = m.materials[p.material].pbrMetallicRoughness.baseColorFactor;
     if (f.size() != 4) continue;
-    auto ch = [&f](int k) { return static_cast<uint8_t>(std::clamp(f[k], 0.0, 1.0) * 255.0 + 0.5); };
+    auto ch = [&f](int k) { return color_channel(f[k], 1.0); };
     return rgba8(ch(0), ch(1), ch(2), ch(3));
   }
   return Object{}.color;

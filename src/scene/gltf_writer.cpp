@@ -5,12 +5,13 @@
 #include <bit>
 #include <filesystem>
 #include <optional>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/atomic_file.hpp"
 #include "cellwalk/error.hpp"
 #include "cellwalk/import.hpp"
-#include "scene/output_file.hpp"
 
 namespace cellwalk {
 
@@ -30,7 +31,7 @@ struct GltfWriter::Impl {
   std::string path;
   bool glb = false;
   std::string bin_name;  // the .bin's file name, for the buffer's uri
-  std::optional<detail::OutputFile> bin;
+  std::optional<AtomicFile> bin;  // for a .glb a scratch file, never committed
   nlohmann::json accessors = nlohmann::json::array(), views = nlohmann::json::array(),
                  meshes = nlohmann::json::array(), nodes = nlohmann::json::array(),
                  materials = nlohmann::json::array();
@@ -39,9 +40,8 @@ struct GltfWriter::Impl {
   int add_accessor(const void* data, size_t bytes, size_t count, const char* type,
                    int component_type, int target, nlohmann::json extra = {}) {
     const uint64_t offset = bin->size();
-    bin->write(data, bytes);
-    static constexpr char kPad[4] = {};
-    bin->write(kPad, (4 - bytes % 4) % 4);
+    bin->write(std::span(static_cast<const uint8_t*>(data), bytes));
+    bin->write(std::string_view("\0\0\0", (4 - bytes % 4) % 4));
     views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", target}});
     nlohmann::json a = {{"bufferView", views.size() - 1}, {"componentType", component_type},
                         {"count", count}, {"type", type}};
@@ -71,7 +71,8 @@ GltfWriter::GltfWriter(std::string path) : impl_(std::make_unique<Impl>()) {
   const std::filesystem::path p(path);
   impl_->glb = p.extension() == ".glb";
   impl_->bin_name = p.stem().string() + ".bin";
-  // A .glb's binary chunk is staged in a scratch file and copied in after the JSON chunk.
+  // A .glb's binary chunk is staged in a scratch file and copied in after the JSON chunk, whose
+  // size is known only at the end; the scratch is never committed, so nothing of it remains.
   impl_->bin.emplace(impl_->glb ? path + ".bin" : (p.parent_path() / impl_->bin_name).string());
   impl_->path = std::move(path);
 }
@@ -116,24 +117,26 @@ void GltfWriter::add(const Object& object) {
 
 namespace {
 
-void write_u32(detail::OutputFile& out, uint32_t v) { out.write(&v, 4); }
+void write_u32(AtomicFile& out, uint32_t v) {
+  out.write(std::string_view(reinterpret_cast<const char*>(&v), sizeof v));
+}
 
 // GLB: 12-byte header, then a JSON chunk and a BIN chunk, each padded to 4 bytes.
-void write_glb(const std::string& path, std::string json, detail::OutputFile& bin) {
+void write_glb(const std::string& path, std::string json, AtomicFile& bin) {
   json.append((4 - json.size() % 4) % 4, ' ');
   const uint64_t total = 12 + 8 + json.size() + (bin.size() > 0 ? 8 + bin.size() : 0);
   if (total > UINT32_MAX) fail(path, "GLB larger than 4 GiB; write .gltf instead");
-  detail::OutputFile out(path);
-  out.write("glTF", 4);
+  AtomicFile out(path);
+  out.write("glTF");
   write_u32(out, 2);
   write_u32(out, static_cast<uint32_t>(total));
   write_u32(out, static_cast<uint32_t>(json.size()));
-  out.write("JSON", 4);
+  out.write("JSON");
   out.write(json);
   if (bin.size() > 0) {
     write_u32(out, static_cast<uint32_t>(bin.size()));
-    out.write("BIN\0", 4);
-    out.append_file(bin);
+    out.write(std::string_view("BIN\0", 4));
+    out.append_contents_of(bin);
   }
   out.commit();
 }
@@ -145,13 +148,11 @@ void GltfWriter::finish() {
   const std::string json = w.document().dump();
   if (w.glb) {
     write_glb(w.path, json, *w.bin);
-    w.bin->discard();
+    w.bin.reset();  // removes the scratch file
     return;
   }
   w.bin->commit();
-  detail::OutputFile out(w.path);
-  out.write(json);
-  out.commit();
+  write_file_atomically(w.path, json);
 }
 
 }  // namespace cellwalk

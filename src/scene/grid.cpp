@@ -32,7 +32,8 @@ NavGraph lane_graph(const GridParams& p, const Aabb& model, double spacing) {
 }  // namespace
 
 SceneInfo generate_grid(const GridParams& params, ObjectSink& sink) {
-  if (params.nx < 1 || params.ny < 1 || params.nz < 1) fail("grid", "nx, ny and nz must be at least 1");
+  if (params.nx < 1 || params.ny < 1 || params.nz < 1)
+    fail("grid", "nx, ny and nz must be at least 1");
   if (params.mesh.empty()) fail("grid", "no model given (--mesh FILE)");
   const Mesh model = shapes::unit_model(import_model(params.mesh), params.mesh);
   const Aabb bounds = bounds_of(model);
@@ -40,8 +41,10 @@ SceneInfo generate_grid(const GridParams& params, ObjectSink& sink) {
   const double spacing = params.spacing > 0.0 ? params.spacing : 1.5 * largest;
   // Lanes need a gap between neighbours in plan; layers may touch.
   if (spacing <= std::max(bounds.size().x, bounds.size().z))
-    fail("grid", "spacing " + std::to_string(spacing) + " leaves no lane between instances of size " +
-                     std::to_string(std::max(bounds.size().x, bounds.size().z)) + " (after scaling to unit size)");
+    fail("grid", "spacing " + std::to_string(spacing) +
+                     " leaves no lane between instances of size " +
+                     std::to_string(std::max(bounds.size().x, bounds.size().z)) +
+                     " (after scaling to unit size)");
 
   SceneInfo info{"grid:" + params.mesh, params.seed, {}, lane_graph(params, bounds, spacing)};
   shapes::ObjectEmitter out(sink, info);
@@ -55,7 +58,8 @@ SceneInfo generate_grid(const GridParams& params, ObjectSink& sink) {
                             Vec3(float(x * spacing), float(y * spacing), float(z * spacing))));
         const Rgba8 colour = rgba8(uint8_t(rng.integer(80, 240)), uint8_t(rng.integer(80, 240)),
                                    uint8_t(rng.integer(80, 240)));
-        out.emit("grid/" + std::to_string(x) + "_" + std::to_string(y) + "_" + std::to_string(z), colour, mesh);
+        out.emit("grid/" + std::to_string(x) + "_" + std::to_string(y) + "_" + std::to_string(z),
+                 colour, mesh);
       }
   return info;
 }

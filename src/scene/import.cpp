@@ -36,6 +36,11 @@ std::vector<uint8_t> read_whole_file(const std::string& path) {
   return bytes;
 }
 
+uint8_t color_channel(double v, double scale) {
+  const double x = v / scale * 255.0;
+  return x > 0.0 ? static_cast<uint8_t>(std::min(x, 255.0) + 0.5) : 0;
+}
+
 std::string format_number(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.17g", v);

@@ -16,10 +16,6 @@ struct ObjState {
   std::vector<uint32_t> polygon;
 };
 
-uint8_t unit_channel(double v) {
-  return static_cast<uint8_t>(v <= 0.0 ? 0.0 : v >= 1.0 ? 255.0 : v * 255.0 + 0.5);
-}
-
 void read_vertex(TextCursor& in, ObjState& s) {
   double v[6];
   int n = 0;
@@ -31,7 +27,8 @@ void read_vertex(TextCursor& in, ObjState& s) {
   s.mesh.positions.emplace_back(v[0], v[1], v[2]);
   if (n == 6) {
     s.mesh.colors.resize(s.mesh.positions.size());  // keeps indices aligned with positions
-    s.mesh.colors.back() = rgba8(unit_channel(v[3]), unit_channel(v[4]), unit_channel(v[5]));
+    s.mesh.colors.back() = rgba8(color_channel(v[3], 1.0), color_channel(v[4], 1.0),
+                                 color_channel(v[5], 1.0));
     ++s.colored;
   }
 }

@@ -36,16 +36,13 @@ OffLayout parse_keyword(TextCursor& in) {
   if (k.starts_with("4") || k.starts_with("n"))
     in.fail("4D and n-dimensional OFF are not supported");
   if (k != "OFF") in.fail("not an OFF file: expected a keyword such as OFF, COFF or NOFF");
-  if (in.token_in_line() == "BINARY") in.fail("binary OFF is not supported");
   return layout;
 }
 
 // Colour values are floats in [0, 1] when written with a point or exponent, else 0..255.
-uint8_t color_channel(const TextCursor& in, std::string_view token) {
-  const double v = in.to_double(token, "a colour value");
+uint8_t off_channel(const TextCursor& in, std::string_view token) {
   const bool unit = token.find_first_of(".eE") != std::string_view::npos;
-  const double scaled = unit ? v * 255.0 : v;
-  return static_cast<uint8_t>(scaled < 0.0 ? 0.0 : scaled > 255.0 ? 255.0 : scaled + 0.5);
+  return color_channel(in.to_double(token, "a colour value"), unit ? 1.0 : 255.0);
 }
 
 void read_vertex(TextCursor& in, const OffLayout& layout, Mesh& mesh) {
@@ -70,9 +67,9 @@ void read_vertex(TextCursor& in, const OffLayout& layout, Mesh& mesh) {
   }
   if (layout.colors) {
     const bool alpha = n == needed + 4;
-    mesh.colors.push_back(rgba8(color_channel(in, v[next]), color_channel(in, v[next + 1]),
-                                color_channel(in, v[next + 2]),
-                                alpha ? color_channel(in, v[next + 3]) : 255));
+    mesh.colors.push_back(rgba8(off_channel(in, v[next]), off_channel(in, v[next + 1]),
+                                off_channel(in, v[next + 2]),
+                                alpha ? off_channel(in, v[next + 3]) : 255));
   }
   in.next_line();
 }
@@ -98,7 +95,9 @@ void read_face(TextCursor& in, uint64_t vertex_count, std::vector<uint32_t>& pol
 Object read_off(Bytes bytes, const std::string& name) {
   TextCursor in(bytes, name, '#');
   const OffLayout layout = parse_keyword(in);
-  const uint64_t vertices = in.to_count(in.token(), "vertex count", kMinVertexBytes);
+  const std::string_view first = in.token();
+  if (first == "BINARY") in.fail("binary OFF is not supported");
+  const uint64_t vertices = in.to_count(first, "vertex count", kMinVertexBytes);
   const uint64_t faces = in.to_count(in.token_in_line(), "face count", kMinFaceBytes);
   // The edge count is unused, and some writers leave it out.
   if (std::string_view edges = in.token_in_line(); !edges.empty()) in.to_count(edges, "edge count", 0);

@@ -4,9 +4,8 @@
 // each with tanks, a boiler with drum and stack, pipe runs rising, bending and crossing with
 // flanges and valves, grating walkways with railings, and ladders.
 #include <cmath>
-#include <string>
-
 #include <glm/gtc/matrix_transform.hpp>
+#include <string>
 
 #include "cellwalk/error.hpp"
 #include "cellwalk/generators.hpp"
@@ -24,7 +23,8 @@ constexpr float kAisle = 12.0f;  // aisle width between units
 constexpr float kPad = 0.3f;     // concrete pad under each unit
 constexpr double kEyeHeight = 1.7;
 
-const Rgba8 kSteel = rgba8(150, 155, 160), kRailing = rgba8(230, 190, 40), kGrating = rgba8(110, 110, 115);
+const Rgba8 kSteel = rgba8(150, 155, 160), kRailing = rgba8(230, 190, 40),
+            kGrating = rgba8(110, 110, 115);
 const Rgba8 kServices[] = {rgba8(210, 200, 60), rgba8(60, 150, 80), rgba8(60, 100, 190),
                            rgba8(190, 60, 50), rgba8(200, 200, 200)};
 
@@ -51,7 +51,8 @@ struct Detail {
 
 class UnitBuilder {
  public:
-  UnitBuilder(shapes::ObjectEmitter& out, const Detail& detail, Vec3 origin, std::string prefix, Random rng)
+  UnitBuilder(shapes::ObjectEmitter& out, const Detail& detail, Vec3 origin, std::string prefix,
+              Random rng)
       : out_(out), detail_(detail), origin_(origin), prefix_(std::move(prefix)), rng_(rng) {}
 
   void build() {
@@ -88,7 +89,8 @@ class UnitBuilder {
   static Mesh ladder(float height) {
     Assembly a;
     for (float x : {-0.25f, 0.25f}) a.add(shapes::box({0.05f, height, 0.05f}), Vec3(x, 0, 0));
-    for (float y = 0.3f; y < height; y += 0.3f) a.add(shapes::box({0.5f, 0.03f, 0.03f}), Vec3(0, y, 0));
+    for (float y = 0.3f; y < height; y += 0.3f)
+      a.add(shapes::box({0.5f, 0.03f, 0.03f}), Vec3(0, y, 0));
     return a.take();
   }
 
@@ -97,9 +99,11 @@ class UnitBuilder {
     const Rgba8 brick = rgba8(150, 70, 55);
     emit("boiler", brick, shapes::box({10, 14, 8}), at);
     Mesh drum = shapes::cylinder(1.5f, 9, detail_.sectors);
-    transform(drum, glm::rotate(Mat4(1.0f), kPi / 2, Vec3(0, 0, 1)) * Assembly::translate({0, -4.5f, 0}));
+    transform(drum,
+              glm::rotate(Mat4(1.0f), kPi / 2, Vec3(0, 0, 1)) * Assembly::translate({0, -4.5f, 0}));
     emit("boiler/drum", kSteel, std::move(drum), at + Vec3(0, 15.5f, 0));
-    emit("boiler/stack", rgba8(90, 90, 95), shapes::cylinder(1.0f, 30, detail_.sectors), at + Vec3(3, 14, 2));
+    emit("boiler/stack", rgba8(90, 90, 95), shapes::cylinder(1.0f, 30, detail_.sectors),
+         at + Vec3(3, 14, 2));
   }
 
   // Up from the pad, a bend, across the unit, a bend, back down: with flanges at the joints
@@ -108,7 +112,8 @@ class UnitBuilder {
     const float r = float(rng_.uniform(0.1, 0.35)), bend = r * 3;
     const float top = float(rng_.uniform(3.0, 9.0));
     const bool along_x = p % 2 == 0;
-    const float lane = 12 + (kUnit - 16) * (float(p / 2) + 0.5f) / float((detail_.pipe_runs + 1) / 2);
+    const float lane =
+        12 + (kUnit - 16) * (float(p / 2) + 0.5f) / float((detail_.pipe_runs + 1) / 2);
     const float span = float(rng_.uniform(10.0, kUnit - 8));
     const Vec3 dir = along_x ? Vec3(1, 0, 0) : Vec3(0, 0, 1);
     const Vec3 start = along_x ? Vec3(3, kPad, lane) : Vec3(lane, kPad, 3);
@@ -118,7 +123,8 @@ class UnitBuilder {
     Assembly a;
     a.add(pipe(r, top - kPad, n), Vec3(0));
     a.add(elbow(r, bend, yaw), Vec3(0, top - kPad, 0));
-    a.add(pipe(r, span - 2 * bend, n), Assembly::translate(dir * bend + Vec3(0, top - kPad + bend, 0)) * turn_y_to(dir));
+    a.add(pipe(r, span - 2 * bend, n),
+          Assembly::translate(dir * bend + Vec3(0, top - kPad + bend, 0)) * turn_y_to(dir));
     a.add(elbow(r, bend, yaw + kPi), dir * span + Vec3(0, top - kPad, 0));
     a.add(pipe(r, top - kPad, n), dir * span);
     const Rgba8 service = kServices[rng_.integer(0, std::size(kServices) - 1)];
@@ -129,7 +135,8 @@ class UnitBuilder {
       emit(id + "/flange" + at, kSteel, flange(r, Vec3(0, 1, 0)), start + Vec3(0, y, 0));
       emit(id + "/flange" + at + "b", kSteel, flange(r, Vec3(0, 1, 0)), end + Vec3(0, y, 0));
     }
-    emit(id + "/flange_mid", kSteel, flange(r, dir), start + dir * (span / 2) + Vec3(0, top + bend - kPad, 0));
+    emit(id + "/flange_mid", kSteel, flange(r, dir),
+         start + dir * (span / 2) + Vec3(0, top + bend - kPad, 0));
     emit(id + "/valve", rgba8(200, 40, 40), valve(r, dir), start + Vec3(0, 1.6f, 0));
   }
 
@@ -137,7 +144,8 @@ class UnitBuilder {
   Mesh elbow(float r, float bend, float yaw) const {
     Mesh m = shapes::torus(bend, r, detail_.bend_sectors, detail_.small_sectors, kPi / 2);
     transform(m, glm::rotate(Mat4(1.0f), yaw, Vec3(0, 1, 0)) * Assembly::translate({bend, 0, 0}) *
-                     glm::rotate(Mat4(1.0f), kPi, Vec3(0, 0, 1)) * glm::rotate(Mat4(1.0f), kPi / 2, Vec3(1, 0, 0)));
+                     glm::rotate(Mat4(1.0f), kPi, Vec3(0, 0, 1)) *
+                     glm::rotate(Mat4(1.0f), kPi / 2, Vec3(1, 0, 0)));
     return m;
   }
 
@@ -149,7 +157,8 @@ class UnitBuilder {
     a.add(shapes::cylinder(r * 1.7f, 0.08f, detail_.small_sectors), Vec3(0, -0.04f, 0));
     for (int b = 0; b < 8; ++b) {
       const float angle = 2 * kPi * float(b) / 8;
-      a.add(shapes::box({0.05f, 0.12f, 0.05f}), Vec3(r * 1.45f * std::cos(angle), -0.06f, r * 1.45f * std::sin(angle)));
+      a.add(shapes::box({0.05f, 0.12f, 0.05f}),
+            Vec3(r * 1.45f * std::cos(angle), -0.06f, r * 1.45f * std::sin(angle)));
     }
     Mesh m = a.take();
     transform(m, turn_y_to(axis));
@@ -162,7 +171,8 @@ class UnitBuilder {
     a.add(shapes::cylinder(r * 1.4f, 0.5f, detail_.small_sectors), Vec3(0, -0.25f, 0));
     const Mat4 out = turn_y_to(side);
     a.add(shapes::cylinder(0.03f, r * 1.4f + 0.3f, 6), out);
-    a.add(shapes::torus(0.2f, 0.02f, detail_.small_sectors, 6), out * Assembly::translate({0, r * 1.4f + 0.3f, 0}));
+    a.add(shapes::torus(0.2f, 0.02f, detail_.small_sectors, 6),
+          out * Assembly::translate({0, r * 1.4f + 0.3f, 0}));
     return a.take();
   }
 
@@ -174,12 +184,14 @@ class UnitBuilder {
     a.add(shapes::box({length, 0.05f, width}), Vec3(0, height, 0));
     for (float x = -length / 2; x <= length / 2 + 0.01f; x += 1.5f)
       a.add(shapes::box({0.05f, 1.1f, 0.05f}), Vec3(x, height, width / 2));
-    for (float y : {0.55f, 1.05f}) a.add(shapes::box({length, 0.05f, 0.05f}), Vec3(0, height + y, width / 2));
+    for (float y : {0.55f, 1.05f})
+      a.add(shapes::box({length, 0.05f, 0.05f}), Vec3(0, height + y, width / 2));
     for (float x = -length / 2; x <= length / 2 + 0.01f; x += 6.0f)
       a.add(shapes::box({0.2f, height, 0.2f}), Vec3(x, 0, 0));
     Mesh m = a.take();
     Mesh steps = ladder(height);
-    transform(steps, Assembly::translate({-length / 2 - 0.4f, 0, 0}) * glm::rotate(Mat4(1.0f), kPi / 2, Vec3(0, 1, 0)));
+    transform(steps, Assembly::translate({-length / 2 - 0.4f, 0, 0}) *
+                         glm::rotate(Mat4(1.0f), kPi / 2, Vec3(0, 1, 0)));
     const Mat4 to_edge = side == 0 ? Assembly::translate({kUnit / 2, 0, kUnit - 2})
                                    : Assembly::translate({kUnit - 2, 0, kUnit / 2}) *
                                          glm::rotate(Mat4(1.0f), kPi / 2, Vec3(0, 1, 0));
@@ -215,7 +227,8 @@ NavGraph aisle_graph(int ux, int uz) {
 
 SceneInfo generate_plant(const PlantParams& params, ObjectSink& sink) {
   if (params.units_x < 1 || params.units_z < 1) fail("plant", "needs at least one unit each way");
-  if (!(params.detail > 0.0 && params.detail <= 16.0)) fail("plant", "detail must be within (0, 16]");
+  if (!(params.detail > 0.0 && params.detail <= 16.0))
+    fail("plant", "detail must be within (0, 16]");
   SceneInfo info{"plant", params.seed, {}, aisle_graph(params.units_x, params.units_z)};
   shapes::ObjectEmitter out(sink, info);
   const Detail detail(params.detail);
@@ -224,7 +237,8 @@ SceneInfo generate_plant(const PlantParams& params, ObjectSink& sink) {
     for (int i = 0; i < params.units_x; ++i) {
       const Vec3 origin(kAisle + i * (kUnit + kAisle), 0, kAisle + j * (kUnit + kAisle));
       const std::string prefix = "plant/u" + std::to_string(i) + "_" + std::to_string(j) + "/";
-      UnitBuilder(out, detail, origin, prefix, rng.split(1 + uint64_t(j) * params.units_x + i)).build();
+      UnitBuilder(out, detail, origin, prefix, rng.split(1 + uint64_t(j) * params.units_x + i))
+          .build();
     }
   return info;
 }

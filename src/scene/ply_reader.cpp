@@ -232,9 +232,9 @@ VertexLayout vertex_layout(const Element& e, const BodyReader& body) {
   return l;
 }
 
+// Float channels are in [0, 1], 16-bit ones in 0..65535, the others in 0..255.
 uint8_t to_channel(double v, PlyType t) {
-  const double scaled = is_float(t) ? v * 255.0 : size_of(t) == 2 ? v / 257.0 : v;
-  return static_cast<uint8_t>(scaled < 0.0 ? 0.0 : scaled > 255.0 ? 255.0 : scaled + 0.5);
+  return color_channel(v, is_float(t) ? 1.0 : size_of(t) == 2 ? 65535.0 : 255.0);
 }
 
 void skip_list(BodyReader& body, const Property& p) {

@@ -32,6 +32,10 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
 constexpr uint64_t kMaxModelBytes = uint64_t(2) << 30;
 std::vector<uint8_t> read_whole_file(const std::string& path);
 
+// A colour channel in 0..255 from a value on `scale` (1 for [0, 1] floats, 255 for bytes);
+// out-of-range values clamp and NaN gives 0 (a float-to-int cast of NaN is undefined).
+uint8_t color_channel(double v, double scale);
+
 // A value read as a double (an index, a count) for a message: "12", "1.5", "nan".
 std::string format_number(double v);
 

@@ -13,6 +13,7 @@
 #include "cellwalk/atomic_file.hpp"
 #include "cellwalk/error.hpp"
 #include "core/bytes.hpp"
+#include "scene/scene_info_codec.hpp"
 
 namespace cellwalk {
 namespace {
@@ -25,18 +26,6 @@ constexpr size_t kFrameBytes = 16;    // u32 payload size, u32 zero, u64 xxh3 of
 constexpr size_t kTrailerBytes = 24;  // u64 footer offset, u64 footer bytes, end magic
 constexpr size_t kEntryBytes = 44;   // u64 offset, u32 size, u32 triangles, u32 colour, 6 f32 box
 constexpr uint32_t kHasNormals = 1, kHasColors = 2;
-
-void put_box(ByteWriter& w, const Aabb& b) {
-  w.put(b.min);
-  w.put(b.max);
-}
-
-Aabb get_box(ByteReader& r) {
-  Aabb b;
-  b.min = r.get<Vec3>("box min");
-  b.max = r.get<Vec3>("box max");
-  return b;
-}
 
 // Frames a payload: size, zero, checksum, payload.
 void write_framed(AtomicFile& file, std::span<const uint8_t> payload) {
@@ -108,16 +97,7 @@ void SceneWriter::finish(SceneInfo info) {
   ByteWriter w;
   w.put(static_cast<uint32_t>(impl_->entries.size()));
   w.put(impl_->triangles);
-  w.put(info.seed);
-  w.put_string(info.generator);
-  put_box(w, info.bounds);
-  w.put(static_cast<uint32_t>(info.nav.nodes.size()));
-  w.put_array(std::span<const Vec3>(info.nav.nodes));
-  w.put(static_cast<uint32_t>(info.nav.edges.size()));
-  for (auto [a, b] : info.nav.edges) {
-    w.put(a);
-    w.put(b);
-  }
+  encode_scene_info(w, info);
   for (const SceneEntry& e : impl_->entries) {
     w.put(e.offset);
     w.put(e.size);
@@ -200,17 +180,7 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
     ByteReader r(payload, path_, footer_offset + kFrameBytes);
     const uint32_t count = r.get<uint32_t>("object count");
     triangles_ = r.get<uint64_t>("triangle count");
-    info_.seed = r.get<uint64_t>("seed");
-    info_.generator = r.get_string("generator");
-    info_.bounds = get_box(r);
-    info_.nav.nodes = r.get_array<Vec3>(r.get<uint32_t>("nav node count"), "nav nodes");
-    const uint32_t edges = r.get<uint32_t>("nav edge count");
-    auto flat = r.get_array<uint32_t>(uint64_t{edges} * 2, "nav edges");
-    for (uint32_t i = 0; i < edges; ++i) {
-      if (flat[2 * i] >= info_.nav.nodes.size() || flat[2 * i + 1] >= info_.nav.nodes.size())
-        r.error("nav edge " + std::to_string(i) + " names a node that does not exist");
-      info_.nav.edges.emplace_back(flat[2 * i], flat[2 * i + 1]);
-    }
+    info_ = decode_scene_info(r);
     if (count > r.remaining() / kEntryBytes) r.error("object table truncated: " + std::to_string(count) + " entries announced");
     entries_.resize(count);
     uint64_t sum = 0;

@@ -28,7 +28,10 @@ Band classify(Vec2 a, Vec2 b, bool whole) {
 class Vertices {
  public:
   Vertices(Mesh& mesh, const Polyline& line, const Revolution& how, bool whole)
-      : mesh_(mesh), line_(line), how_(how), ring_size_(whole ? how.sectors : how.sectors + 1),
+      : mesh_(mesh),
+        line_(line),
+        how_(how),
+        ring_size_(whole ? how.sectors : how.sectors + 1),
         rings_(line.points.size(), kNone) {}
 
   uint32_t at(size_t point, int sector) {
@@ -77,8 +80,10 @@ void triangle(Mesh& mesh, uint32_t a, uint32_t b, uint32_t c) {
 void cap(Mesh& mesh, Vertices& v, size_t point, int n, bool upward) {
   v.reset();
   for (int k = 1; k + 1 < n; ++k) {
-    if (upward) triangle(mesh, v.at(point, 0), v.at(point, k + 1), v.at(point, k));
-    else triangle(mesh, v.at(point, 0), v.at(point, k), v.at(point, k + 1));
+    if (upward)
+      triangle(mesh, v.at(point, 0), v.at(point, k + 1), v.at(point, k));
+    else
+      triangle(mesh, v.at(point, 0), v.at(point, k), v.at(point, k + 1));
   }
 }
 
@@ -94,7 +99,9 @@ void band(Mesh& mesh, Vertices& v, size_t p0, size_t p1, Band kind, int n) {
   }
 }
 
-Polyline line(std::initializer_list<Vec2> points) { return Polyline{points, false}; }
+Polyline line(std::initializer_list<Vec2> points) {
+  return Polyline{points, false};
+}
 
 }  // namespace
 
@@ -120,7 +127,8 @@ Mesh revolve(std::span<const Polyline> profile, const Revolution& how) {
 Mesh box(Vec3 size) {
   // A square prism of 4 faceted sectors turned 45°: corners at (±½, ±½).
   const float r = std::numbers::sqrt2_v<float> * 0.5f;
-  const Polyline profile[] = {line({{0, 0}, {r, 0}}), line({{r, 0}, {r, 1}}), line({{r, 1}, {0, 1}})};
+  const Polyline profile[] = {line({{0, 0}, {r, 0}}), line({{r, 0}, {r, 1}}),
+                              line({{r, 1}, {0, 1}})};
   Mesh mesh = revolve(profile, {.sectors = 4, .phase = kPi / 4, .faceted = true});
   transform(mesh, glm::scale(Mat4(1.0f), size));
   return mesh;
@@ -129,7 +137,8 @@ Mesh box(Vec3 size) {
 Mesh cylinder(float radius, float height, int sectors, bool capped) {
   const Polyline side = line({{radius, 0}, {radius, height}});
   if (!capped) return revolve({&side, 1}, {.sectors = sectors});
-  const Polyline profile[] = {line({{0, 0}, {radius, 0}}), side, line({{radius, height}, {0, height}})};
+  const Polyline profile[] = {line({{0, 0}, {radius, 0}}), side,
+                              line({{radius, height}, {0, height}})};
   return revolve(profile, {.sectors = sectors});
 }
 
@@ -161,7 +170,8 @@ Mesh torus(float major_radius, float tube_radius, int sectors, int sides, float 
   Polyline circle{{}, true};
   for (int j = 0; j < sides; ++j) {
     const float phi = 2.0f * kPi * static_cast<float>(j) / sides;
-    circle.points.push_back({major_radius + tube_radius * std::cos(phi), tube_radius * std::sin(phi)});
+    circle.points.push_back(
+        {major_radius + tube_radius * std::cos(phi), tube_radius * std::sin(phi)});
   }
   return revolve({&circle, 1}, {.sectors = sectors, .sweep = sweep});
 }
@@ -171,7 +181,9 @@ void Assembly::add(Mesh part, const Mat4& m) {
   append(mesh_, part);
 }
 
-Mat4 Assembly::translate(Vec3 t) { return glm::translate(Mat4(1.0f), t); }
+Mat4 Assembly::translate(Vec3 t) {
+  return glm::translate(Mat4(1.0f), t);
+}
 
 Mat4 place(Vec3 translation, float yaw, Vec3 scale) {
   Mat4 m = glm::translate(Mat4(1.0f), translation);
@@ -179,7 +191,9 @@ Mat4 place(Vec3 translation, float yaw, Vec3 scale) {
   return glm::scale(m, scale);
 }
 
-void paint(Mesh& mesh, Rgba8 color) { mesh.colors.assign(mesh.positions.size(), color); }
+void paint(Mesh& mesh, Rgba8 color) {
+  mesh.colors.assign(mesh.positions.size(), color);
+}
 
 Mesh unit_model(std::vector<Object> objects, const std::string& where) {
   Mesh merged;

@@ -28,8 +28,8 @@ struct Polyline {
 };
 
 struct Revolution {
-  int sectors = 16;  // angular segments
-  float phase = 0.0f;  // angle of the first sector boundary, radians
+  int sectors = 16;                                // angular segments
+  float phase = 0.0f;                              // angle of the first sector boundary, radians
   float sweep = 2.0f * std::numbers::pi_v<float>;  // < 2π leaves the ends open (elbows)
   bool faceted = false;  // flat-shaded sectors (boxes, pyramids) instead of smooth
 };
@@ -62,7 +62,6 @@ class Assembly {
   void add(Mesh part, const Mat4& m);
   void add(Mesh part, Vec3 translation) { add(std::move(part), translate(translation)); }
   Mesh take() { return std::move(mesh_); }
-  const Mesh& mesh() const { return mesh_; }
 
   static Mat4 translate(Vec3 t);
 

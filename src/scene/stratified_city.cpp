@@ -21,11 +21,12 @@ using shapes::Assembly;
 constexpr double kEyeHeight = 1.7;
 constexpr double kParkBlockChance = 0.15;  // [ours] Appendix A gives no proportions
 constexpr double kTreeLinedChance = 0.4;
-constexpr double kMinSlot = 5.0;   // slots narrower than this stay empty ("too small")
-constexpr double kAlley = 1.0;     // half the gap between neighbouring slots
+constexpr double kMinSlot = 5.0;  // slots narrower than this stay empty ("too small")
+constexpr double kAlley = 1.0;    // half the gap between neighbouring slots
 constexpr float kFloorHeight = 3.5f;
 
-const Rgba8 kGrass = rgba8(70, 150, 60), kWater = rgba8(70, 130, 220), kStone = rgba8(170, 165, 155);
+const Rgba8 kGrass = rgba8(70, 150, 60), kWater = rgba8(70, 130, 220),
+            kStone = rgba8(170, 165, 155);
 
 struct Rect {
   double x0, z0, x1, z1;
@@ -75,8 +76,8 @@ Mesh fountain(Vec3 centre, double radius, Random& rng) {
 }
 
 Rgba8 random_colour(Random& rng, uint8_t alpha) {
-  return rgba8(uint8_t(rng.integer(60, 230)), uint8_t(rng.integer(60, 230)), uint8_t(rng.integer(60, 230)),
-               alpha);
+  return rgba8(uint8_t(rng.integer(60, 230)), uint8_t(rng.integer(60, 230)),
+               uint8_t(rng.integer(60, 230)), alpha);
 }
 
 struct BuildingStyle {
@@ -110,9 +111,11 @@ void add_segment(Assembly& a, const BuildingStyle& s, Vec3 centre, Vec2 size, fl
 }
 
 Mesh building(const Rect& slot, double max_height, Random& rng, Rgba8& colour) {
-  const BuildingStyle style{rng.chance(0.4), rng.chance(0.5), uint8_t(rng.chance(0.25) ? 140 : 255)};
+  const BuildingStyle style{rng.chance(0.4), rng.chance(0.5),
+                            uint8_t(rng.chance(0.25) ? 140 : 255)};
   const float height = static_cast<float>(rng.uniform(0.15, 0.85) * max_height);
-  const float top = static_cast<float>(std::min(rng.uniform(0.05, 0.15) * max_height, max_height - height));
+  const float top =
+      static_cast<float>(std::min(rng.uniform(0.05, 0.15) * max_height, max_height - height));
   Vec2 plan(float(slot.w()), float(slot.d()));
   const int segments = static_cast<int>(rng.integer(1, 4));
   Assembly a;
@@ -136,7 +139,8 @@ Mesh tree(Vec3 at, Random& rng) {
   a.add(painted(shapes::cylinder(0.15f, h * 0.4f, 6), rgba8(110, 80, 50)), at);
   Mesh crown = rng.chance(0.5) ? shapes::cone(h * 0.22f, h * 0.7f, 10)
                                : shapes::ellipsoid(Vec3(h * 0.22f, h * 0.35f, h * 0.22f), 10, 6);
-  a.add(painted(std::move(crown), rgba8(40, uint8_t(rng.integer(110, 160)), 40)), at + Vec3(0, h * 0.3f, 0));
+  a.add(painted(std::move(crown), rgba8(40, uint8_t(rng.integer(110, 160)), 40)),
+        at + Vec3(0, h * 0.3f, 0));
   return a.take();
 }
 
@@ -186,7 +190,8 @@ class Generator {
     for (int i = 0; i <= p_.blocks_x; ++i)
       for (int j = 0; j < p_.blocks_z; ++j) {
         Assembly a;
-        add_slab(a, {i * pitch_x(), j * pitch_z() + sw, i * pitch_x() + sw, (j + 1) * pitch_z()}, 0, h, asphalt);
+        add_slab(a, {i * pitch_x(), j * pitch_z() + sw, i * pitch_x() + sw, (j + 1) * pitch_z()}, 0,
+                 h, asphalt);
         emit("street/z" + std::to_string(i) + "_" + std::to_string(j), asphalt, a.take());
       }
   }
@@ -205,7 +210,8 @@ class Generator {
     if (inner.w() < kMinSlot || inner.d() < kMinSlot) return;
     if (rng.chance(kParkBlockChance)) {
       emit("park/" + id, kGrass, park(inner));
-      emit("fountain/" + id, kStone, fountain(inner.centre(), std::min(inner.w(), inner.d()) * 0.15, rng));
+      emit("fountain/" + id, kStone,
+           fountain(inner.centre(), std::min(inner.w(), inner.d()) * 0.15, rng));
       return;
     }
     const std::vector<double> rows = cuts(inner.z0, inner.z1, p_.rows_per_block, rng);
@@ -222,7 +228,8 @@ class Generator {
     const double pick = rng.uniform();
     if (pick < 0.1) return emit("park/" + id, kGrass, park(s));
     if (pick < 0.2)
-      return emit("fountain/" + id, kStone, fountain(s.centre(), std::min(s.w(), s.d()) * 0.4, rng));
+      return emit("fountain/" + id, kStone,
+                  fountain(s.centre(), std::min(s.w(), s.d()) * 0.4, rng));
     Rgba8 colour;
     Mesh m = building(s, p_.max_height, rng, colour);
     emit("building/" + id, colour, std::move(m));
@@ -241,8 +248,10 @@ class Generator {
 
   // Trees every tree_spacing metres round the loop `line`, corners once.
   void trees(const Rect& line, const std::string& id, Random& rng) {
-    const Vec3 corners[] = {{float(line.x0), 0, float(line.z0)}, {float(line.x1), 0, float(line.z0)},
-                            {float(line.x1), 0, float(line.z1)}, {float(line.x0), 0, float(line.z1)}};
+    const Vec3 corners[] = {{float(line.x0), 0, float(line.z0)},
+                            {float(line.x1), 0, float(line.z0)},
+                            {float(line.x1), 0, float(line.z1)},
+                            {float(line.x0), 0, float(line.z1)}};
     int n = 0;
     for (int side = 0; side < 4; ++side) {
       const Vec3 from = corners[side], to = corners[(side + 1) % 4];
@@ -256,7 +265,9 @@ class Generator {
   // Street centre lines at eye height above the street surface.
   void nav() {
     const float y = static_cast<float>(p_.street_height + kEyeHeight);
-    const auto node = [&](int i, int j) { return static_cast<uint32_t>(j * (p_.blocks_x + 1) + i); };
+    const auto node = [&](int i, int j) {
+      return static_cast<uint32_t>(j * (p_.blocks_x + 1) + i);
+    };
     for (int j = 0; j <= p_.blocks_z; ++j)
       for (int i = 0; i <= p_.blocks_x; ++i) {
         info_.nav.nodes.emplace_back(float(i * pitch_x() + p_.street_width / 2), y,
@@ -273,7 +284,8 @@ class Generator {
 };
 
 void check(const StratifiedCityParams& p) {
-  if (p.blocks_x < 1 || p.blocks_z < 1) fail("stratified-city", "needs at least one block each way");
+  if (p.blocks_x < 1 || p.blocks_z < 1)
+    fail("stratified-city", "needs at least one block each way");
   if (!(p.block_length > 0 && p.block_width > 0 && p.street_width > 0 && p.max_height > 0))
     fail("stratified-city", "block sizes, street width and maximum height must be positive");
   if (p.rows_per_block < 1 || p.columns_per_block < 1)

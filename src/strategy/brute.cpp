@@ -4,30 +4,24 @@
 
 namespace cellwalk {
 
-BruteStrategy::BruteStrategy(const SceneReader& scene, bool cull) : scene_(scene), cull_(cull) {}
+BruteStrategy::BruteStrategy(const World& world, const StrategyOptions& options, bool cull)
+    : world_(world), store_(world, options.memory_budget_bytes), cull_(cull) {}
 
 void BruteStrategy::select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) {
   Stopwatch watch;
   items.clear();
   const Frustum frustum(camera);
-  for (ObjectId id = 0; id < scene_.object_count(); ++id) {
-    const SceneEntry& e = scene_.entry(id);
-    if (!cull_ || frustum.intersects(e.bounds)) items.push_back({id, 0, e.color});
+  for (ObjectId id = 0; id < world_.object_count(); ++id) {
+    const ObjectRecord& o = world_.object(id);
+    if (!cull_ || frustum.intersects(o.bounds)) items.push_back({id, 0, o.color});
   }
   stats.query_ms += watch.ms();
 }
 
 const Mesh* BruteStrategy::mesh(const DrawItem& item, FrameStats& stats) {
-  Stopwatch watch;
-  auto record = scene_.read_record(item.object);
-  stats.io_ms += watch.lap_ms();
-  stats.bytes_read += record.size();
-  ++stats.cache_misses;
-  current_ = scene_.decode_record(item.object, record);
-  stats.decode_ms += watch.lap_ms();
-  return &current_->mesh;
+  current_.reset();  // the renderer has uploaded it: let the store evict it
+  current_ = store_.get(item.object, item.lod, EntryMeta{}, stats);
+  return current_.get();
 }
-
-uint64_t BruteStrategy::resident_bytes() const { return current_ ? current_->mesh.byte_size() : 0; }
 
 }  // namespace cellwalk

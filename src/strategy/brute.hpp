@@ -1,8 +1,9 @@
 // The baseline every seed compares against: every object in the view frustum at full detail.
 #pragma once
 
-#include <optional>
+#include <memory>
 
+#include "cellwalk/geometry_store.hpp"
 #include "cellwalk/strategy.hpp"
 
 namespace cellwalk {
@@ -10,17 +11,19 @@ namespace cellwalk {
 class BruteStrategy : public Strategy {
  public:
   // cull = false draws every object whatever the view: the fidelity harness's ground truth.
-  BruteStrategy(const SceneReader& scene, bool cull);
+  BruteStrategy(const World& world, const StrategyOptions& options, bool cull);
 
   std::string name() const override { return cull_ ? "brute" : "ground-truth"; }
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
-  uint64_t resident_bytes() const override;
+  uint64_t resident_bytes() const override { return store_.resident_bytes(); }
+  uint64_t peak_resident_bytes() const override { return store_.peak_resident_bytes(); }
 
  private:
-  const SceneReader& scene_;
+  const World& world_;
+  GeometryStore store_;
   bool cull_;
-  std::optional<Object> current_;  // the one object decoded for the renderer's upload
+  std::shared_ptr<const Mesh> current_;  // the mesh handed to the renderer for upload
 };
 
 }  // namespace cellwalk

@@ -7,10 +7,10 @@ namespace cellwalk {
 
 std::vector<std::string> strategy_names() { return {"brute", "ground-truth"}; }
 
-std::unique_ptr<Strategy> make_strategy(const std::string& name, const SceneReader& scene,
-                                        const StrategyOptions& /*options*/) {
-  if (name == "brute") return std::make_unique<BruteStrategy>(scene, true);
-  if (name == "ground-truth") return std::make_unique<BruteStrategy>(scene, false);
+std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& world,
+                                        const StrategyOptions& options) {
+  if (name == "brute") return std::make_unique<BruteStrategy>(world, options, true);
+  if (name == "ground-truth") return std::make_unique<BruteStrategy>(world, options, false);
   std::string known;
   for (const auto& n : strategy_names()) known += (known.empty() ? "" : ", ") + n;
   fail("strategy \"" + name + "\"", "unknown; choose one of " + known);

@@ -1,0 +1,27 @@
+#include "cellwalk/process_memory.hpp"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+namespace cellwalk {
+namespace {
+
+uint64_t status_kib(const char* field) {
+  FILE* f = std::fopen("/proc/self/status", "r");
+  if (!f) return 0;
+  char line[256];
+  uint64_t kib = 0;
+  const size_t n = std::strlen(field);
+  while (std::fgets(line, sizeof line, f))
+    if (std::strncmp(line, field, n) == 0) kib = std::strtoull(line + n, nullptr, 10);
+  std::fclose(f);
+  return kib;
+}
+
+}  // namespace
+
+uint64_t peak_rss_bytes() { return status_kib("VmHWM:") * 1024; }
+uint64_t current_rss_bytes() { return status_kib("VmRSS:") * 1024; }
+
+}  // namespace cellwalk

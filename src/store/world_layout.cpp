@@ -1,0 +1,71 @@
+#include "store/world_layout.hpp"
+
+#include <xxhash.h>
+
+#include <array>
+#include <cstring>
+
+#include "cellwalk/error.hpp"
+#include "core/bytes.hpp"
+
+namespace cellwalk::world_layout {
+
+std::vector<uint8_t> encode_header(const Header& h) {
+  ByteWriter w;
+  w.put(kMagic);
+  w.put(h.version);
+  w.put(h.page_size);
+  w.put(h.page_count);
+  w.put(h.checksum_first_page);
+  w.put(h.checksummed_pages);
+  w.put(h.checksum_bytes);
+  w.put(h.checksum_hash);
+  w.put(h.section_first_page);
+  w.put(h.section_count);
+  w.put(uint32_t{0});
+  w.put(h.section_bytes);
+  w.put(h.section_hash);
+  const uint64_t own = XXH3_64bits(w.bytes().data(), w.size());
+  w.put(own);
+  return std::move(w.bytes());
+}
+
+Header decode_header(std::span<const uint8_t> bytes, const std::string& path, uint64_t file_size) {
+  ByteReader r(bytes, path, 0);
+  if (bytes.size() < kHeaderBytes) r.error("too short to be a world file (" + std::to_string(file_size) + " bytes)");
+  if (std::memcmp(bytes.data(), kMagic, 8) != 0) r.error("not a cellwalk world file (bad magic)");
+  r.get<std::array<char, 8>>("magic");
+  Header h;
+  h.version = r.get<uint32_t>("version");
+  if (h.version != kVersion)
+    fail(path + "@8", "world format version " + std::to_string(h.version) + ", this cellwalk reads " +
+                          std::to_string(kVersion) + ": rebuild the world with this cellwalk");
+  h.page_size = r.get<uint32_t>("page size");
+  h.page_count = r.get<uint64_t>("page count");
+  h.checksum_first_page = r.get<uint64_t>("checksum table page");
+  h.checksummed_pages = r.get<uint64_t>("checksummed pages");
+  h.checksum_bytes = r.get<uint64_t>("checksum table bytes");
+  h.checksum_hash = r.get<uint64_t>("checksum table hash");
+  h.section_first_page = r.get<uint64_t>("section table page");
+  h.section_count = r.get<uint32_t>("section count");
+  r.get<uint32_t>("padding");
+  h.section_bytes = r.get<uint64_t>("section table bytes");
+  h.section_hash = r.get<uint64_t>("section table hash");
+  const uint64_t own = r.get<uint64_t>("header hash");
+  if (XXH3_64bits(bytes.data(), kHeaderBytes - 8) != own)
+    fail(path + "@0", "header: checksum mismatch (the file is damaged)");
+  if (h.page_size < 512 || (h.page_size & (h.page_size - 1)) != 0)
+    fail(path + "@12", "header: page size " + std::to_string(h.page_size) + " is invalid");
+  if (h.page_count * h.page_size != file_size)
+    fail(path, "file has " + std::to_string(file_size) + " bytes but its header says " +
+                   std::to_string(h.page_count) + " pages of " + std::to_string(h.page_size) +
+                   " (truncated or extended)");
+  if (h.checksummed_pages + 1 != h.checksum_first_page || h.checksum_bytes != 4 * h.checksummed_pages ||
+      h.section_first_page * h.page_size < h.checksum_first_page * h.page_size + h.checksum_bytes ||
+      h.section_first_page >= h.page_count || h.section_bytes != h.section_count * kSectionEntryBytes ||
+      h.section_first_page * h.page_size + h.section_bytes > file_size)
+    fail(path + "@0", "header: table positions are inconsistent (the file is damaged)");
+  return h;
+}
+
+}  // namespace cellwalk::world_layout

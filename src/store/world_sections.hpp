@@ -1,0 +1,17 @@
+// Names and record sizes of the world file's sections (docs/format.md, "World file").
+#pragma once
+
+#include <cstddef>
+
+namespace cellwalk::world_sections {
+
+inline constexpr const char* kParams = "params";      // build parameters, JSON
+inline constexpr const char* kScene = "scene";        // SceneInfo: generator, bounds, navigation
+inline constexpr const char* kObjects = "objects";    // one ObjectRecord per object
+inline constexpr const char* kLods = "lods";          // one LodRecord per level
+inline constexpr const char* kGeometry = "geometry";  // encoded levels (mesh_codec)
+
+constexpr size_t kObjectRecordBytes = 24 + 4 + 4 + 8;
+constexpr size_t kLodRecordBytes = 8 + 4 + 4 + 4 + 4;
+
+}  // namespace cellwalk::world_sections

@@ -1,0 +1,173 @@
+// Tests of the mesh codec (src/store/mesh_codec.cpp): round trips on the bunny and random
+// meshes within the documented quantisation bound, bytes per triangle, and damaged input
+// (every byte flipped, every truncation) giving Error or a valid mesh.
+#include "cellwalk/mesh_codec.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <random>
+
+#include "cellwalk/error.hpp"
+#include "cellwalk/import.hpp"
+#include "cellwalk/lod.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+// The bunny as the store holds it: cache- and fetch-ordered (level 0 of its chain).
+const Mesh& bunny() {
+  static const Mesh mesh = [] {
+    LodParams one_level;
+    one_level.min_triangles = size_t(1) << 30;
+    return build_lod_chain(import_model(test::cgal_mesh("bunny00.off")).at(0).mesh, one_level)
+        .levels[0]
+        .mesh;
+  }();
+  return mesh;
+}
+
+// Triangles as index triples rotated to start at the smallest index, sorted: the index
+// codec may rotate a triangle (keeping its winding) but not change the set.
+std::vector<std::array<uint32_t, 3>> triangles(const Mesh& m) {
+  std::vector<std::array<uint32_t, 3>> out;
+  for (size_t t = 0; t < m.indices.size(); t += 3) {
+    std::array<uint32_t, 3> tri{m.indices[t], m.indices[t + 1], m.indices[t + 2]};
+    std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
+    out.push_back(tri);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void expect_round_trip(const Mesh& in, const CodecParams& params) {
+  const Mesh out = decode_mesh(encode_mesh(in, params), "test");
+  ASSERT_EQ(out.vertex_count(), in.vertex_count());
+  EXPECT_EQ(triangles(out), triangles(in));
+  EXPECT_EQ(out.colors, in.colors);
+  ASSERT_EQ(out.normals.size(), in.normals.size());
+  const Aabb box = bounds_of(in);
+  // The documented bound: half a quantisation step per axis, plus float rounding.
+  const Vec3 magnitude = glm::max(glm::abs(box.min), glm::abs(box.max));
+  const Vec3 bound = box.size() / float((1 << params.position_bits) - 1) * 0.5f + magnitude * 4e-7f;
+  Vec3 worst(0);
+  for (size_t i = 0; i < in.vertex_count(); ++i) {
+    worst = glm::max(worst, glm::abs(out.positions[i] - in.positions[i]));
+  }
+  EXPECT_TRUE(glm::all(glm::lessThanEqual(worst, bound)))
+      << "worst " << worst.x << " " << worst.y << " " << worst.z << " bound " << bound.x;
+  // Octahedral normals: the largest angle error at b bits is about 2 / 2^(b-1) radians.
+  const float max_angle = 2.5f / float(1 << (params.normal_bits - 1));
+  for (size_t i = 0; i < in.normals.size(); ++i) {
+    ASSERT_GE(glm::dot(out.normals[i], glm::normalize(in.normals[i])), std::cos(max_angle) - 1e-6f)
+        << "vertex " << i;
+  }
+}
+
+TEST(MeshCodec, BunnyRoundTrip) {
+  for (int bits : {16, 12, 8}) {
+    for (bool zstd : {false, true}) {
+      SCOPED_TRACE("bits " + std::to_string(bits) + (zstd ? " zstd" : ""));
+      expect_round_trip(bunny(), {bits, 8, zstd});
+    }
+  }
+  expect_round_trip(bunny(), {16, 16, false});
+}
+
+// Bytes per triangle against raw floats (12 B/vertex position + 12 normal + 12 B/triangle).
+TEST(MeshCodec, BunnyBytesPerTriangle) {
+  const Mesh& m = bunny();
+  const double raw = 24.0 * m.vertex_count() + 12.0 * m.triangle_count();
+  const double plain = encode_mesh(m, {}).size(), zstd = encode_mesh(m, {16, 8, true}).size();
+  const double n = double(m.triangle_count());
+  std::printf("bunny: raw %.2f B/tri, codec %.2f B/tri (%.1fx), +zstd %.2f B/tri (%.1fx)\n",
+              raw / n, plain / n, raw / plain, zstd / n, raw / zstd);
+  EXPECT_LT(plain, raw / 3);
+  EXPECT_LE(zstd, plain);
+}
+
+Mesh random_mesh(std::mt19937& rng, size_t vertices, size_t triangles, bool attributes) {
+  std::uniform_real_distribution<float> u(-50.0f, 50.0f);
+  Mesh m;
+  for (size_t i = 0; i < vertices; ++i) m.positions.emplace_back(u(rng), u(rng) * 0.01f, u(rng));
+  std::uniform_int_distribution<uint32_t> pick(0, uint32_t(vertices - 1));
+  for (size_t i = 0; i < triangles * 3; ++i) m.indices.push_back(pick(rng));
+  if (attributes) {
+    compute_normals(m);
+    for (Vec3& n : m.normals) n = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
+    for (size_t i = 0; i < vertices; ++i) m.colors.push_back(uint32_t(rng()));
+  }
+  return m;
+}
+
+TEST(MeshCodec, RandomMeshesRoundTrip) {
+  std::mt19937 rng(11);
+  for (int i = 0; i < 20; ++i) {
+    const Mesh m = random_mesh(rng, 1 + rng() % 3000, rng() % 4000, i % 2 == 0);
+    const CodecParams p{int(1 + rng() % 16), int(2 + rng() % 15), i % 3 == 0};
+    SCOPED_TRACE("mesh " + std::to_string(i));
+    expect_round_trip(m, p);
+  }
+}
+
+TEST(MeshCodec, EmptyAndFlatMeshes) {
+  const Mesh empty = decode_mesh(encode_mesh(Mesh{}), "test");
+  EXPECT_EQ(empty.vertex_count(), 0u);
+  EXPECT_EQ(empty.triangle_count(), 0u);
+  Mesh flat = test::box_mesh({Vec3(0, 1, 0), Vec3(1, 1, 1)});  // zero height
+  expect_round_trip(flat, {});
+}
+
+TEST(MeshCodec, BadParametersAreErrors) {
+  const Mesh box = test::box_mesh({Vec3(0), Vec3(1)});
+  EXPECT_THROW(encode_mesh(box, {0, 8, false}), Error);
+  EXPECT_THROW(encode_mesh(box, {17, 8, false}), Error);
+  EXPECT_THROW(encode_mesh(box, {16, 1, false}), Error);
+  EXPECT_THROW(decode_mesh(std::vector<uint8_t>{}, "test"), Error);
+}
+
+// Decoding either throws Error or gives a mesh validate() accepts; anything else (another
+// exception, a crash, a sanitizer report) fails.
+void expect_error_or_valid(const std::vector<uint8_t>& bytes) {
+  try {
+    const Mesh m = decode_mesh(bytes, "damaged");
+    validate(m, "damaged");
+  } catch (const Error&) {
+  }
+}
+
+TEST(MeshCodec, EveryByteFlipAndTruncation) {
+  Mesh m = test::box_mesh({Vec3(0), Vec3(1)});
+  m.colors.assign(m.vertex_count(), rgba8(10, 20, 30));
+  for (bool zstd : {false, true}) {
+    const std::vector<uint8_t> good = encode_mesh(m, {16, 8, zstd});
+    for (size_t i = 0; i < good.size(); ++i) {
+      for (uint8_t mask : {0x01, 0x80, 0xff}) {
+        std::vector<uint8_t> bad = good;
+        bad[i] ^= mask;
+        expect_error_or_valid(bad);
+      }
+      expect_error_or_valid({good.begin(), good.begin() + i});
+    }
+    std::vector<uint8_t> longer = good;
+    longer.push_back(0);
+    EXPECT_THROW(decode_mesh(longer, "test"), Error);
+  }
+}
+
+TEST(MeshCodec, HugeDeclaredCountsAreRefused) {
+  std::vector<uint8_t> bytes = encode_mesh(test::box_mesh({Vec3(0), Vec3(1)}));
+  bytes[8] = bytes[9] = bytes[10] = bytes[11] = 0xff;  // vertex count 2^32 - 1
+  try {
+    decode_mesh(bytes, "test");
+    FAIL() << "no Error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("decode limit"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace cellwalk
