@@ -15,6 +15,7 @@ struct LensOptions {
   float near_plane = 0.25f;
   float far_plane = 5000.0f;
   double gpu_budget_mib = 512.0;
+  bool flat_background = false;
 
   void add_to(CLI::App& cmd) {
     cmd.add_option("--width", width, "Image width in pixels")->capture_default_str()->check(CLI::Range(16, 8192));
@@ -23,6 +24,7 @@ struct LensOptions {
     cmd.add_option("--near", near_plane, "Near plane, metres")->capture_default_str()->check(CLI::PositiveNumber);
     cmd.add_option("--far", far_plane, "Far plane, metres")->capture_default_str()->check(CLI::PositiveNumber);
     cmd.add_option("--gpu-budget", gpu_budget_mib, "GPU buffer cache budget, MiB")->capture_default_str()->check(CLI::NonNegativeNumber);
+    cmd.add_flag("--flat-background", flat_background, "Plain background instead of sky and ground");
   }
   Camera lens() const {
     Camera c;
@@ -37,6 +39,7 @@ struct LensOptions {
     s.width = width;
     s.height = height;
     s.gpu_budget_bytes = static_cast<uint64_t>(gpu_budget_mib * 1024 * 1024);
+    s.backdrop = !flat_background;
     return s;
   }
 };

@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   cellwalk::app::register_compare(root);
   cellwalk::app::register_render(root);
   cellwalk::app::register_view(root);
+  cellwalk::app::register_bench(root);
   try {
     root.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

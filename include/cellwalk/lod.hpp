@@ -21,8 +21,10 @@ struct LodParams {
   // meshopt_simplify "stalls" when it keeps more than this fraction of the previous level
   // (topology constraints); the level is then made with meshopt_simplifySloppy.
   float stall_fraction = 0.9f;
-  // Original vertices sampled (evenly by index) to measure a sloppy level's error.
-  size_t error_samples = 4096;
+  // Original vertices whose distance to every level is measured: all of them when the mesh
+  // has at most this many (the measurement is then exact for vertices), else this many
+  // evenly spaced by index.
+  size_t error_samples = 100000;
 };
 
 enum class LodMethod {
@@ -34,11 +36,16 @@ enum class LodMethod {
 struct LodLevel {
   Mesh mesh;
   size_t triangle_count = 0;
-  // Object-space error in the mesh's units: how far the level's surface may lie from the
-  // original's. kSimplify: meshopt's result_error × meshopt_simplifyScale (a quadric
-  // distance to the original triangles' planes). kSloppy: the larger of meshopt's estimate
-  // and the measured distance from sampled original vertices to the level's triangles.
-  // Never smaller than the previous level's (made non-decreasing along the chain).
+  // Object-space error in the mesh's units: how far the level's surface lies from the
+  // original's, measured both ways against the ORIGINAL mesh. The largest of
+  //  - the distance from each sampled original vertex (see error_samples) to the nearest
+  //    triangle of this level,
+  //  - the distance from each vertex and triangle centroid of this level to the nearest
+  //    original triangle,
+  //  - meshopt's own estimate for the step from the previous level, and the previous
+  //    level's error (so errors never decrease along the chain).
+  // Distances are exact point–triangle distances. Points between the samples are not
+  // measured: this is not the Hausdorff distance between the surfaces (docs/lod.md).
   float error = 0.0f;
   LodMethod method = LodMethod::kOriginal;
 };
@@ -48,9 +55,10 @@ struct LodChain {
   std::vector<LodLevel> levels;
 };
 
-// Builds the chain. Every level is simplified from the original mesh (so errors are against
-// the original, not accumulated), then vertex-cache optimised and vertex-fetch optimised
-// (vertices reordered and compacted; normals and colours follow their positions).
+// Builds the chain. Every level is simplified from the previous one (so the whole chain costs
+// about two simplifications of the input), its error measured against the original, then
+// vertex-cache optimised and vertex-fetch optimised (vertices reordered and compacted;
+// normals and colours follow their positions).
 // Stops at params.min_triangles or when neither simplifier makes progress.
 // REQUIRES: validate(mesh) passes; 0 < ratio < 1.
 LodChain build_lod_chain(const Mesh& mesh, const LodParams& params = {});

@@ -58,6 +58,10 @@ struct RenderSettings {
   int width = 640;
   int height = 480;
   Rgba8 background = rgba8(178, 204, 230);
+  // Draw a backdrop instead of the flat background: a sky gradient above the horizon and a
+  // ground plane (y = 0) with a faint 10 m grid below it, so a walker sees where the ground
+  // is. Colour only: the id target stays background and depth is untouched.
+  bool backdrop = false;
   // GPU-side vertex and index buffers are cached under this many bytes (LRU). A mesh larger
   // than the whole budget is drawn from a transient buffer and not kept.
   uint64_t gpu_budget_bytes = 512ull << 20;

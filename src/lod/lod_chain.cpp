@@ -3,7 +3,6 @@
 // Michael Garland and Paul S. Heckbert. Surface simplification using quadric error metrics.
 // 1997 (meshopt_simplify). Jarek Rossignac and Paul Borrel. Multi-resolution 3D
 // approximations for rendering complex scenes. 1993 (vertex clustering, meshopt's sloppy).
-// Christer Ericson. Real-Time Collision Detection. 2005, §5.1.5 (closest point on triangle).
 #include <meshoptimizer.h>
 
 #include <algorithm>
@@ -11,6 +10,7 @@
 #include <limits>
 
 #include "cellwalk/lod.hpp"
+#include "lod/surface_distance.hpp"
 
 namespace cellwalk {
 namespace {
@@ -19,45 +19,47 @@ const float* position_data(const Mesh& mesh) {
   return &mesh.positions[0].x;
 }
 
-// Closest point to p on triangle abc (Ericson §5.1.5), squared distance returned.
-float point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  auto dist2 = [&](const Vec3& q) { return glm::dot(p - q, p - q); };
-  if (d1 <= 0 && d2 <= 0) return dist2(a);
-  const Vec3 bp = p - b;
-  const float d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return dist2(b);
-  const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return dist2(a + ab * (d1 / (d1 - d3)));
-  const Vec3 cp = p - c;
-  const float d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return dist2(c);
-  const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return dist2(a + ac * (d2 / (d2 - d6)));
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-    return dist2(b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))));
-  }
-  const float denom = 1.0f / (va + vb + vc);
-  return dist2(a + ab * (vb * denom) + ac * (vc * denom));
+// The original vertices whose distance to every level is measured (all of them up to
+// params.error_samples, else that many evenly spaced by index).
+std::vector<Vec3> original_samples(const Mesh& original, size_t samples) {
+  const std::vector<Vec3>& v = original.positions;
+  if (v.size() <= samples) return v;
+  std::vector<Vec3> out;
+  out.reserve(samples);
+  for (size_t i = 0; i < samples; ++i) out.push_back(v[i * v.size() / samples]);
+  return out;
 }
 
-// One-sided distance from evenly sampled original vertices to the simplified triangles
-// (which index the original vertex array). Brute force: sloppy levels are small.
-float sampled_distance(const Mesh& mesh, const std::vector<uint32_t>& indices, size_t samples) {
-  const std::vector<Vec3>& v = mesh.positions;
-  const size_t step = std::max<size_t>(1, v.size() / std::max<size_t>(1, samples));
-  float worst2 = 0.0f;
-  for (size_t i = 0; i < v.size(); i += step) {
-    float best2 = std::numeric_limits<float>::infinity();
-    for (size_t t = 0; t + 2 < indices.size() && best2 > worst2; t += 3) {
-      best2 = std::min(best2, point_triangle_distance2(v[i], v[indices[t]], v[indices[t + 1]],
-                                                       v[indices[t + 2]]));
-    }
-    // A level with no triangles leaves best2 infinite: the error is then unbounded.
-    worst2 = std::max(worst2, best2);
+// Points of the level whose distance to the original is measured: its vertices and its
+// triangles' centroids.
+std::vector<Vec3> level_samples(const Mesh& level) {
+  std::vector<Vec3> out = level.positions;
+  out.reserve(level.vertex_count() + level.triangle_count());
+  for (size_t t = 0; t < level.indices.size(); t += 3) {
+    out.push_back((level.positions[level.indices[t]] + level.positions[level.indices[t + 1]] +
+                   level.positions[level.indices[t + 2]]) /
+                  3.0f);
   }
+  return out;
+}
+
+// The original as measured against: its triangles in a grid and its sampled vertices.
+struct Original {
+  TriangleGrid triangles;
+  std::vector<Vec3> samples;
+};
+
+// REQUIRES: `mesh` is compacted (level 0), so that only vertices in use are sampled.
+Original original_of(const Mesh& mesh, size_t samples) {
+  return {TriangleGrid(mesh.positions, mesh.indices), original_samples(mesh, samples)};
+}
+
+// max(floor, distance from the sampled original vertices to the level's triangles,
+// distance from the level's sample points to the original's triangles).
+float measured_error(const Original& original, const Mesh& level, float floor) {
+  const TriangleGrid level_triangles(level.positions, level.indices);
+  float worst2 = max_nearest2(level_triangles, original.samples, floor * floor);
+  worst2 = max_nearest2(original.triangles, level_samples(level), worst2);
   return std::sqrt(worst2);
 }
 
@@ -84,32 +86,33 @@ Mesh optimised_level(const Mesh& mesh, std::vector<uint32_t> indices) {
 }
 
 struct Simplified {
-  std::vector<uint32_t> indices;
-  float error = 0.0f;  // absolute
+  std::vector<uint32_t> indices;  // into the source mesh's vertices
+  float error = 0.0f;             // meshopt's estimate against the source, absolute
   LodMethod method = LodMethod::kSimplify;
 };
 
-Simplified simplify_to(const Mesh& mesh, size_t target_triangles, size_t previous_triangles,
-                       float scale, const LodParams& params) {
-  const float* xyz = position_data(mesh);
-  const size_t n = mesh.vertex_count();
+// `source` (the previous level) simplified towards target_triangles: meshopt_simplify, or
+// meshopt_simplifySloppy when that keeps more than stall_fraction of the source.
+Simplified simplify_to(const Mesh& source, size_t target_triangles, const LodParams& params) {
+  const float* xyz = position_data(source);
+  const size_t n = source.vertex_count();
+  const float scale = meshopt_simplifyScale(xyz, n, sizeof(Vec3));
   const float no_error_limit = std::numeric_limits<float>::max();
   Simplified s;
-  s.indices.resize(mesh.indices.size());
+  s.indices.resize(source.indices.size());
   float relative = 0.0f;
-  s.indices.resize(meshopt_simplify(s.indices.data(), mesh.indices.data(), mesh.indices.size(), xyz,
-                                    n, sizeof(Vec3), target_triangles * 3, no_error_limit, 0,
+  s.indices.resize(meshopt_simplify(s.indices.data(), source.indices.data(), source.indices.size(),
+                                    xyz, n, sizeof(Vec3), target_triangles * 3, no_error_limit, 0,
                                     &relative));
   s.error = relative * scale;
-  if (s.indices.size() / 3 <= params.stall_fraction * previous_triangles) return s;
+  if (s.indices.size() / 3 <= params.stall_fraction * source.triangle_count()) return s;
 
-  s.indices.resize(mesh.indices.size());
-  s.indices.resize(meshopt_simplifySloppy(s.indices.data(), mesh.indices.data(),
-                                          mesh.indices.size(), xyz, n, sizeof(Vec3),
+  s.indices.resize(source.indices.size());
+  s.indices.resize(meshopt_simplifySloppy(s.indices.data(), source.indices.data(),
+                                          source.indices.size(), xyz, n, sizeof(Vec3),
                                           target_triangles * 3, no_error_limit, &relative));
+  s.error = relative * scale;
   s.method = LodMethod::kSloppy;
-  // meshopt's sloppy estimate is the grid's quadric error, not a distance bound: measure too.
-  s.error = std::max(relative * scale, sampled_distance(mesh, s.indices, params.error_samples));
   return s;
 }
 
@@ -121,21 +124,22 @@ LodChain build_lod_chain(const Mesh& mesh, const LodParams& params) {
   first.mesh = optimised_level(mesh, mesh.indices);
   first.triangle_count = mesh.triangle_count();
   chain.levels.push_back(std::move(first));
-  if (mesh.vertex_count() == 0) return chain;
+  if (chain.levels[0].triangle_count <= params.min_triangles) return chain;
 
-  const float scale = meshopt_simplifyScale(position_data(mesh), mesh.vertex_count(), sizeof(Vec3));
+  const Original original = original_of(chain.levels[0].mesh, params.error_samples);
   while (chain.levels.back().triangle_count > params.min_triangles) {
     const LodLevel& previous = chain.levels.back();
     const size_t target = std::max<size_t>(
         params.min_triangles, size_t(std::ceil(previous.triangle_count * params.ratio)));
-    Simplified s = simplify_to(mesh, target, previous.triangle_count, scale, params);
+    Simplified s = simplify_to(previous.mesh, target, params);
     const size_t triangles = s.indices.size() / 3;
     if (triangles == 0 || triangles >= previous.triangle_count) break;  // no progress
     LodLevel level;
     level.triangle_count = triangles;
-    level.error = std::max(s.error, previous.error);
     level.method = s.method;
-    level.mesh = optimised_level(mesh, std::move(s.indices));
+    level.mesh = optimised_level(previous.mesh, std::move(s.indices));
+    // Measured against the original, not the previous level: errors do not accumulate.
+    level.error = measured_error(original, level.mesh, std::max(s.error, previous.error));
     chain.levels.push_back(std::move(level));
   }
   return chain;

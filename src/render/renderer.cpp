@@ -123,6 +123,7 @@ struct Renderer::Impl {
     program = link_program(render::kMeshVertexShader, render::kMeshFragmentShader);
     vao = make_mesh_vertex_array();
     overlay_program = link_program(render::kOverlayVertexShader, render::kOverlayFragmentShader);
+    backdrop_program = link_program(render::kBackdropVertexShader, render::kBackdropFragmentShader);
     glCreateBuffers(1, &overlay_buffer);
     overlay_vao = make_overlay_vertex_array(overlay_buffer);
   }
@@ -131,6 +132,7 @@ struct Renderer::Impl {
     glDeleteVertexArrays(1, &overlay_vao);
     glDeleteBuffers(1, &overlay_buffer);
     glDeleteProgram(overlay_program);
+    glDeleteProgram(backdrop_program);
     glDeleteVertexArrays(1, &vao);
     glDeleteProgram(program);
     glDeleteFramebuffers(1, &framebuffer);
@@ -171,12 +173,33 @@ struct Renderer::Impl {
     glClearNamedFramebufferfv(framebuffer, GL_COLOR, 0, background.data());
     glClearNamedFramebufferuiv(framebuffer, GL_COLOR, 1, no_object);
     glClearNamedFramebufferfv(framebuffer, GL_DEPTH, 0, &far_depth);
+    if (settings.backdrop) draw_backdrop(camera, background);
 
     glUseProgram(program);
     glBindVertexArray(vao);
     glProgramUniformMatrix4fv(program, render::kViewProjectionUniform, 1, GL_FALSE,
                               glm::value_ptr(camera.view_projection()));
     glProgramUniform3fv(program, render::kEyePositionUniform, 1, glm::value_ptr(camera.position));
+  }
+
+  // Colour only, no depth: objects drawn afterwards cover it exactly as they cover a clear.
+  void draw_backdrop(const Camera& camera, const std::array<float, 4>& sky) {
+    const GLenum color_only[] = {GL_COLOR_ATTACHMENT0, GL_NONE};
+    glNamedFramebufferDrawBuffers(framebuffer, 2, color_only);
+    glDepthMask(GL_FALSE);
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(backdrop_program);
+    glBindVertexArray(vao);
+    const Mat4 inverse = glm::inverse(camera.view_projection());
+    glProgramUniformMatrix4fv(backdrop_program, render::kInverseViewProjectionUniform, 1, GL_FALSE,
+                              glm::value_ptr(inverse));
+    glProgramUniform3fv(backdrop_program, render::kBackdropEyeUniform, 1, glm::value_ptr(camera.position));
+    glProgramUniform3f(backdrop_program, render::kSkyColorUniform, sky[0], sky[1], sky[2]);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    const GLenum color_and_ids[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(framebuffer, 2, color_and_ids);
+    glEnable(GL_DEPTH_TEST);
+    glDepthMask(GL_TRUE);
   }
 
   void draw(const render::GpuMesh& mesh, const DrawItem& item) {
@@ -260,6 +283,7 @@ struct Renderer::Impl {
   GLuint color = 0, ids = 0, depth = 0, framebuffer = 0;
   GLuint program = 0, vao = 0;
   GLuint overlay_program = 0, overlay_vao = 0, overlay_buffer = 0;
+  GLuint backdrop_program = 0;
   std::vector<const DrawItem*> order;
   std::vector<render::OverlayVertex> overlay_vertices;
 };

@@ -122,6 +122,7 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
   RenderSettings settings;
   settings.width = fb_width;
   settings.height = fb_height;
+  settings.backdrop = true;
   auto renderer = std::make_unique<Renderer>(settings);
 
   ViewerState s;

@@ -1,0 +1,71 @@
+// Visibility engines: from a view cell, which objects can be seen (and how much of the sphere
+// of directions each covers, the degree of visibility of HDoV thesis §5.2.1).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "cellwalk/view_cell.hpp"
+#include "cellwalk/world.hpp"
+
+namespace cellwalk {
+
+// Objects visible from a cell, ascending ids. dov is empty, or one value per object (DoV of
+// eq. 5.2: the maximum over the cell's sample points of the visible solid angle / 4π).
+struct VisibleSet {
+  std::vector<ObjectId> objects;
+  std::vector<float> dov;
+};
+
+// Thread-safety: compute() may be called concurrently for different cells.
+class VisibilityEngine {
+ public:
+  virtual ~VisibilityEngine() = default;
+  virtual std::string name() const = 0;
+  // True if the engine never drops an object visible from some point of the cell.
+  virtual bool conservative() const = 0;
+  virtual VisibleSet compute(const ViewCell& cell) const = 0;
+};
+
+// ---- Engines that exist (src/visibility/engine_registry.cpp) --------------------------------
+
+struct EngineOptions {
+  // Sampling: rays are cast from corners, face centres, the centre and this many random points
+  // on the faces and inside, each over this many directions spread over the whole sphere.
+  int sample_points = 24;
+  int rays_per_point = 4096;
+  uint64_t seed = 1;
+  // DoV: cube-map face resolution (pixels per side) at each of the cell's 8 corners.
+  int dov_resolution = 256;
+  // DoV: eq. 5.11 at pixel centres as the thesis writes it (its weights sum to 1 - O(1/R²)),
+  // instead of the default, eq. 5.11 integrated over each pixel (weights sum to exactly 1).
+  bool dov_midpoint_weights = false;
+};
+
+// Names accepted by make_engine(), e.g. {"sampling", "dov"}.
+std::vector<std::string> engine_names();
+// Throws Error listing engine_names() for an unknown name. The engine keeps a reference to
+// `world`, which must outlive it.
+std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const World& world,
+                                              const EngineOptions& options = {});
+
+// ---- Degree of visibility of groups (HDoV thesis §5.5.3, digest 000 §3.9) ------------------
+
+// Point DoVs at each sample point of a cell: dov[point][i] belongs to objects[i].
+struct CornerDov {
+  std::vector<ObjectId> objects;
+  std::vector<std::vector<float>> dov;
+};
+
+// The DoV of an internal node whose subtree holds `members` (ascending ids): the maximum over
+// the points of the sum of the members' point DoVs. Exact: the ID buffer counts every pixel of
+// the sphere once, so the sum never exceeds 1.
+float group_dov(const CornerDov& corners, std::span<const ObjectId> members);
+// The cheap bound of thesis §6.2.2: the sum of the members' region DoVs (maxima), clamped to 1.
+// Never below group_dov().
+float group_dov_upper_bound(const VisibleSet& set, std::span<const ObjectId> members);
+
+}  // namespace cellwalk
