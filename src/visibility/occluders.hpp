@@ -1,0 +1,43 @@
+// Conservative occluders derived from arbitrary meshes, and the single-occluder test from a
+// box cell.
+// Seeds: 001 vLOD §5.2.2 (occluders must be convex, larger than the cell; concave ones need a
+// conservative stand-in) and 000 HDoV thesis §5.5.1 (large convex occluders near the cell; a
+// convex occluder hiding an object from the cell's 8 vertices hides it from the cell).
+#pragma once
+
+#include <vector>
+
+#include "cellwalk/geometry.hpp"
+#include "cellwalk/mesh.hpp"
+
+namespace cellwalk::visibility {
+
+struct OccluderParams {
+  int grid = 24;           // voxels along the longest side of the mesh's box
+  int max_boxes = 3;       // inscribed boxes per mesh
+  double min_gain = 0.15;  // a further box must add this fraction of the interior voxels
+};
+
+// True when every edge of the mesh (vertices welded by exact position) is used by an even
+// number of triangles: the mesh bounds a solid, and crossing parity says what is inside it.
+bool is_closed(const Mesh& mesh);
+
+// Axis-aligned boxes inside the solid the closed mesh bounds (points of odd crossing parity),
+// each kept a small margin away from the surface; empty when the mesh is not closed or has
+// no interior voxel. A voxel counts as interior only when no triangle's plane and box touch
+// it and crossing rays along all three axes agree it is inside, so numerical doubt only ever
+// drops volume. The boxes may overlap; their union underestimates the solid.
+std::vector<Aabb> inscribed_boxes(const Mesh& mesh, const OccluderParams& params = {});
+
+// Whether segment a→b meets the closed box (slab test in double precision).
+bool segment_meets_box(const Vec3& a, const Vec3& b, const Aabb& box);
+
+// HDoV §5.5.1 made exact for boxes: `occludee` is hidden from every point of `cell` by the
+// opaque convex `occluder` when all 64 segments from a cell corner to an occludee corner meet
+// the occluder. Why it suffices: for a point q, the viewpoints whose segment to q meets a
+// convex occluder form a convex set (the occluder's shadow from q), so containing the cell's
+// corners means containing the cell; and for a viewpoint, the points behind the occluder form
+// a convex set, so containing the occludee's corners means containing the occludee.
+bool occluder_hides(const Aabb& cell, const Aabb& occluder, const Aabb& occludee);
+
+}  // namespace cellwalk::visibility
