@@ -43,7 +43,9 @@ TempDir::~TempDir() {
 
 CommandResult run_cellwalk(const std::string& args) {
   CommandResult result;
-  std::string command = std::string(CELLWALK_BINARY) + " " + args + " 2>&1";
+  // Appended piece by piece: GCC 12 misreads `std::string(literal) + ...` as out of bounds.
+  std::string command = CELLWALK_BINARY;
+  command.append(" ").append(args).append(" 2>&1");
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) {
     result.exit_code = -1;
@@ -119,6 +121,27 @@ std::string write_street_scene(const TempDir& dir, int count, uint64_t seed) {
 std::string write_street_world(const TempDir& dir, int count, uint64_t seed) {
   const std::string scene = write_street_scene(dir, count, seed);
   const std::string world = dir.file("street-" + std::to_string(seed) + ".cww");
+  build_world(scene, world, BuildParams{});
+  return world;
+}
+
+}  // namespace cellwalk::test
+
+namespace cellwalk::test {
+
+std::string write_world(const TempDir& dir, const std::vector<Object>& objects, const NavGraph& nav,
+                        const std::string& name) {
+  const std::string scene = dir.file(name + ".cwscene");
+  const std::string world = dir.file(name + ".cww");
+  SceneWriter writer(scene);
+  for (Object o : objects) {
+    o.bounds = bounds_of(o.mesh);
+    writer.add(o);
+  }
+  SceneInfo info;
+  info.generator = "test-objects";
+  info.nav = nav;
+  writer.finish(info);
   build_world(scene, world, BuildParams{});
   return world;
 }

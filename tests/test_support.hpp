@@ -50,3 +50,15 @@ std::string write_street_scene(const TempDir& dir, int count, uint64_t seed = 1)
 std::string write_street_world(const TempDir& dir, int count, uint64_t seed = 1);
 
 }  // namespace cellwalk::test
+
+#include <vector>
+
+namespace cellwalk::test {
+
+// Writes `objects` (ids must be 0, 1, 2 ... in order; bounds are recomputed from the meshes)
+// as a scene with navigation graph `nav`, builds it into a world file named `name`.cww and
+// returns its path.
+std::string write_world(const TempDir& dir, const std::vector<Object>& objects, const NavGraph& nav,
+                        const std::string& name = "objects");
+
+}  // namespace cellwalk::test

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "cellwalk/error.hpp"
 #include "cellwalk/geometry_store.hpp"
@@ -198,6 +199,25 @@ TEST_F(BuiltWorld, StoreNeverExceedsItsBudget) {
   EXPECT_LE(store.budget().peak(), budget);
   EXPECT_GT(stats.cache_misses, world.object_count());  // it had to evict and reload
   EXPECT_THROW(GeometryStore(world, world.resident_bytes() / 2), Error);
+}
+
+TEST_F(BuiltWorld, ConcurrentReadersSeeTheSameBytes) {
+  World world(world_);
+  std::vector<std::vector<uint8_t>> expected;
+  for (ObjectId id = 0; id < world.object_count(); ++id) expected.push_back(world.read_level(id, 0));
+  std::atomic<int> mismatches{0};
+  std::vector<std::thread> threads;
+  for (int t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      Random rng(static_cast<uint64_t>(t));
+      for (int i = 0; i < 300; ++i) {
+        const ObjectId id = static_cast<ObjectId>(rng.integer(0, static_cast<int64_t>(world.object_count()) - 1));
+        if (world.read_level(id, 0) != expected[id]) ++mismatches;
+        world.decode_level(id, 0, expected[id]);
+      }
+    });
+  for (std::thread& t : threads) t.join();
+  EXPECT_EQ(mismatches.load(), 0);
 }
 
 TEST_F(BuiltWorld, InfoAndVerifyCommands) {

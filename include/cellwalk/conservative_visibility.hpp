@@ -39,7 +39,8 @@ struct ConservativeStats {
   uint64_t objects = 0;
   uint64_t closed_objects = 0;    // meshes with no boundary edge: candidates for occluders
   uint64_t occluder_objects = 0;  // objects with at least one inscribed box
-  uint64_t occluder_boxes = 0;
+  uint64_t occluder_boxes = 0;    // inscribed boxes
+  uint64_t bridges = 0;           // boxes across two touching inscribed boxes
   double occluder_seconds = 0.0;  // to decode the meshes and derive the boxes
 };
 

@@ -26,6 +26,7 @@ float length2(const Vec3& v) {
   return glm::dot(v, v);
 }
 
+
 // Squared distance from a point to a segment, both relative to the segment's start.
 float segment_distance2(const Vec3& ap, const Vec3& ab) {
   const float len2 = length2(ab);
@@ -62,77 +63,68 @@ float point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, cons
 }
 
 TriangleGrid::TriangleGrid(std::span<const Vec3> positions, std::span<const uint32_t> indices) {
+  std::vector<Entry> triangles;
+  std::vector<Aabb> boxes;
+  triangles.reserve(indices.size() / 3);
+  boxes.reserve(indices.size() / 3);
   Aabb box;
   double area = 0.0;
-  triangles_.reserve(indices.size() / 3);
   for (size_t t = 0; t + 2 < indices.size(); t += 3) {
-    const std::array<Vec3, 3> tri{positions[indices[t]], positions[indices[t + 1]],
-                                  positions[indices[t + 2]]};
-    for (const Vec3& v : tri) box.extend(v);
-    area += 0.5 * glm::length(glm::cross(tri[1] - tri[0], tri[2] - tri[0]));
-    triangles_.push_back(tri);
+    const Entry tri{positions[indices[t]], positions[indices[t + 1]], positions[indices[t + 2]]};
+    boxes.push_back({glm::min(tri.a, glm::min(tri.b, tri.c)), glm::max(tri.a, glm::max(tri.b, tri.c))});
+    box.extend(boxes.back());
+    area += 0.5 * glm::length(glm::cross(tri.b - tri.a, tri.c - tri.a));
+    triangles.push_back(tri);
   }
-  if (triangles_.empty()) return;
+  if (triangles.empty()) return;
   origin_ = box.min;
-  const Vec3 extent = box.size();
-  const double n = double(triangles_.size());
   // Rounding of cell coordinates and faces is relative to the coordinates' magnitude.
   slack_ = 8.0f * FLT_EPSILON * (max_component(glm::abs(box.min)) + max_component(glm::abs(box.max)));
+  choose_cells(boxes, box.size(), area);
+  fill_cells(triangles, boxes);
+}
 
+void TriangleGrid::choose_cells(const std::vector<Aabb>& boxes, const Vec3& extent, double area) {
+  const double n = double(boxes.size());
   double cell = kCellEdgeInTriangleEdges * std::sqrt(2.0 * area / n);
   if (!(cell > 0.0)) cell = std::max(double(max_component(extent)), 1e-30);
-  std::array<double, 3> dims{};
-  for (;;) {
+  for (;; cell *= 1.5) {
+    std::array<double, 3> dims;
     for (int k = 0; k < 3; ++k) dims[k] = std::max(1.0, std::ceil(extent[k] / cell));
     const double cells = dims[0] * dims[1] * dims[2];
-    if (cells <= std::max(kMinCells, kMaxCellsPerTriangle * n)) {
-      set_cells(float(cell), dims);
-      if (double(entry_count()) <= kMaxEntriesPerTriangle * n + cells) break;
-    }
-    cell *= 1.5;
+    if (cells > std::max(kMinCells, kMaxCellsPerTriangle * n)) continue;
+    cell_size_ = float(cell);
+    inverse_cell_size_ = 1.0f / cell_size_;
+    for (int k = 0; k < 3; ++k) dims_[k] = int(dims[k]);
+    double entries = 0.0;
+    for (const Aabb& b : boxes) entries += cells_in(b);
+    if (entries <= kMaxEntriesPerTriangle * n + cells) return;
   }
-  fill_cells();
 }
 
-void TriangleGrid::set_cells(float cell, const std::array<double, 3>& dims) {
-  cell_size_ = cell;
-  inverse_cell_size_ = 1.0f / cell;
-  for (int k = 0; k < 3; ++k) dims_[k] = int(dims[k]);
+double TriangleGrid::cells_in(const Aabb& box) const {
+  const Cell lo = cell_of(box.min), hi = cell_of(box.max);
+  return double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
 }
 
-size_t TriangleGrid::entry_count() const {
-  size_t entries = 0;
-  for (const auto& tri : triangles_) {
-    const auto [lo, hi] = cell_range(tri);
-    entries += size_t(hi[0] - lo[0] + 1) * size_t(hi[1] - lo[1] + 1) * size_t(hi[2] - lo[2] + 1);
-  }
-  return entries;
-}
-
-// Counting sort of (cell, triangle) pairs into cell_start_ / cell_triangles_.
-void TriangleGrid::fill_cells() {
+// Counting sort of (cell, triangle) pairs into cell_start_ / entries_.
+void TriangleGrid::fill_cells(const std::vector<Entry>& triangles, const std::vector<Aabb>& boxes) {
   cell_start_.assign(size_t(dims_[0]) * dims_[1] * dims_[2] + 1, 0);
-  auto for_each_cell = [&](const std::array<Vec3, 3>& tri, auto fn) {
-    const auto [lo, hi] = cell_range(tri);
+  auto for_each_cell = [&](const Aabb& box, auto fn) {
+    const Cell lo = cell_of(box.min), hi = cell_of(box.max);
     for (int z = lo[2]; z <= hi[2]; ++z) {
       for (int y = lo[1]; y <= hi[1]; ++y) {
         for (int x = lo[0]; x <= hi[0]; ++x) fn(cell_index(x, y, z));
       }
     }
   };
-  for (const auto& tri : triangles_) for_each_cell(tri, [&](size_t i) { ++cell_start_[i + 1]; });
+  for (const Aabb& box : boxes) for_each_cell(box, [&](size_t i) { ++cell_start_[i + 1]; });
   for (size_t i = 1; i < cell_start_.size(); ++i) cell_start_[i] += cell_start_[i - 1];
-  cell_triangles_.resize(cell_start_.back());
+  entries_.resize(cell_start_.back());
   std::vector<uint32_t> cursor(cell_start_.begin(), cell_start_.end() - 1);
-  for (uint32_t t = 0; t < triangles_.size(); ++t) {
-    for_each_cell(triangles_[t], [&](size_t i) { cell_triangles_[cursor[i]++] = t; });
+  for (size_t t = 0; t < triangles.size(); ++t) {
+    for_each_cell(boxes[t], [&](size_t i) { entries_[cursor[i]++] = triangles[t]; });
   }
-}
-
-std::pair<TriangleGrid::Cell, TriangleGrid::Cell> TriangleGrid::cell_range(
-    const std::array<Vec3, 3>& tri) const {
-  return {cell_of(glm::min(tri[0], glm::min(tri[1], tri[2]))),
-          cell_of(glm::max(tri[0], glm::max(tri[1], tri[2])))};
 }
 
 TriangleGrid::Cell TriangleGrid::cell_of(const Vec3& p) const {
@@ -160,16 +152,26 @@ float TriangleGrid::gap_outside_block(const Vec3& p, const Cell& c, int ring) co
   return std::max(0.0f, gap - slack_);
 }
 
-float TriangleGrid::nearest2(const Vec3& p, float stop2) const {
-  float best2 = std::numeric_limits<float>::infinity();
-  if (triangles_.empty()) return best2;
+float TriangleGrid::nearest2(const Vec3& p, float stop2, uint32_t& hint) const {
+  if (entries_.empty()) return std::numeric_limits<float>::infinity();
+  if (hint >= entries_.size()) hint = 0;
+  float best2 = distance2(p, entries_[hint]);
+  if (best2 <= stop2) return best2;
   // True once a triangle within stop2 is found.
   auto visit = [&](int x, int y, int z) {
     const size_t i = cell_index(x, y, z);
     for (uint32_t e = cell_start_[i]; e < cell_start_[i + 1]; ++e) {
-      const auto& tri = triangles_[cell_triangles_[e]];
-      best2 = std::min(best2, point_triangle_distance2(p, tri[0], tri[1], tri[2]));
-      if (best2 <= stop2) return true;
+      const Entry& tri = entries_[e];
+      // The box test rejects most of a cell's triangles for the price of a few compares.
+      const Vec3 lo = glm::min(tri.a, glm::min(tri.b, tri.c));
+      const Vec3 hi = glm::max(tri.a, glm::max(tri.b, tri.c));
+      if (length2(glm::max(glm::max(lo - p, p - hi), Vec3(0.0f))) >= best2) continue;
+      const float d2 = distance2(p, tri);
+      if (d2 < best2) {
+        best2 = d2;
+        hint = e;
+        if (best2 <= stop2) return true;
+      }
     }
     return false;
   };
@@ -196,7 +198,8 @@ float TriangleGrid::nearest2(const Vec3& p, float stop2) const {
 
 float max_nearest2(const TriangleGrid& grid, std::span<const Vec3> points, float floor2) {
   float worst2 = floor2;
-  for (const Vec3& p : points) worst2 = std::max(worst2, grid.nearest2(p, worst2));
+  uint32_t hint = 0;
+  for (const Vec3& p : points) worst2 = std::max(worst2, grid.nearest2(p, worst2, hint));
   return worst2;
 }
 

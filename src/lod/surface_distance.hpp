@@ -30,34 +30,44 @@ class TriangleGrid {
   // The squared distance from p to the nearest triangle, except that the search stops at
   // the first triangle within sqrt(stop2) and returns that one's squared distance (≤ stop2):
   // all a maximum over points needs. Infinity when there are no triangles.
-  float nearest2(const Vec3& p, float stop2) const;
+  // `hint` (any value; 0 to start) names the triangle tried first, and is set to the one
+  // found, so that a run of nearby queries mostly stops at the first triangle it tries.
+  float nearest2(const Vec3& p, float stop2, uint32_t& hint) const;
 
  private:
+  // A triangle as stored in every cell its box overlaps: a cell's triangles lie side by
+  // side, so a query reads them in one sweep.
+  struct Entry {
+    Vec3 a, b, c;
+  };
   using Cell = std::array<int, 3>;
-  void set_cells(float cell_size, const std::array<double, 3>& dims);
-  // (cell, triangle) pairs the current cell size would store.
-  size_t entry_count() const;
-  void fill_cells();
-  // The first and last cell of a triangle's box.
-  std::pair<Cell, Cell> cell_range(const std::array<Vec3, 3>& tri) const;
+
+  // Sets the cell size and grid dimensions: kCellEdgeInTriangleEdges, coarsened until cells
+  // and entries are linear in the triangle count.
+  void choose_cells(const std::vector<Aabb>& boxes, const Vec3& extent, double area);
+  void fill_cells(const std::vector<Entry>& triangles, const std::vector<Aabb>& boxes);
+  double cells_in(const Aabb& box) const;
   Cell cell_of(const Vec3& p) const;
   size_t cell_index(int x, int y, int z) const;
+  static float distance2(const Vec3& p, const Entry& tri) {
+    return point_triangle_distance2(p, tri.a, tri.b, tri.c);
+  }
   // Lower bound on the distance from p to any triangle outside the block of cells within
-  // `ring` of `c`; negative when that block covers the whole grid.
+  // `ring` of `c`; infinite when that block covers the whole grid.
   float gap_outside_block(const Vec3& p, const Cell& c, int ring) const;
 
-  std::vector<std::array<Vec3, 3>> triangles_;
   Vec3 origin_{0.0f};
   float cell_size_ = 1.0f;
   float inverse_cell_size_ = 1.0f;
   float slack_ = 0.0f;  // float rounding of cell coordinates, subtracted from gaps
   Cell dims_{1, 1, 1};
-  std::vector<uint32_t> cell_start_;      // CSR: cell i holds cell_triangles_[start[i], start[i+1])
-  std::vector<uint32_t> cell_triangles_;  // a triangle is in every cell its box overlaps
+  std::vector<uint32_t> cell_start_;  // CSR: cell i holds entries_[start[i], start[i+1])
+  std::vector<Entry> entries_;
 };
 
 // max(floor2, max over points of the squared distance to the nearest triangle of grid),
-// exactly: each query may stop once it is under the running maximum.
+// exactly: each query may stop once it is under the running maximum. Points in a spatially
+// coherent order (as a vertex-cache-ordered mesh's vertices are) are measured fastest.
 float max_nearest2(const TriangleGrid& grid, std::span<const Vec3> points, float floor2);
 
 }  // namespace cellwalk

@@ -1,8 +1,9 @@
 // The visibility engines cellwalk has, by name (issue 4): "sampling" (Embree rays, vLOD §5 as
-// sampling) and "dov" (HDoV thesis §5.5.2 cube maps, with sampling as its step 1 so objects
-// that cover no pixel still get DoV_s).
+// sampling), "dov" (HDoV thesis §5.5.2 cube maps, with sampling as its step 1 so objects that
+// cover no pixel still get DoV_s) and "conservative" (vLOD §5.2 / HDoV §5.5.1, its own file).
 #include <memory>
 
+#include "cellwalk/conservative_visibility.hpp"
 #include "cellwalk/error.hpp"
 #include "visibility/dov_engine.hpp"
 #include "visibility/sampling_engine.hpp"
@@ -27,12 +28,13 @@ class DovWithPrior : public VisibilityEngine {
 
 }  // namespace
 
-std::vector<std::string> engine_names() { return {"sampling", "dov"}; }
+std::vector<std::string> engine_names() { return {"sampling", "dov", "conservative"}; }
 
 std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const World& world,
                                               const EngineOptions& options) {
   if (name == "sampling") return std::make_unique<visibility::SamplingEngine>(world, options);
   if (name == "dov") return std::make_unique<DovWithPrior>(world, options);
+  if (name == "conservative") return make_conservative_engine(world, ConservativeParams{});
   std::string known;
   for (const std::string& n : engine_names()) known += (known.empty() ? "" : ", ") + n;
   fail("visibility engine '" + name + "'", "unknown; the engines are " + known);

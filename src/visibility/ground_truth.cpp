@@ -4,6 +4,8 @@
 #include "visibility/ground_truth.hpp"
 
 #include <algorithm>
+#include <chrono>
+#include <iterator>
 
 #include "visibility/cell_points.hpp"
 
@@ -26,6 +28,39 @@ std::vector<ObjectId> ground_truth_visible(const CubeMapRenderer& cube, const Vi
   for (size_t i = 0; i < seen.size(); ++i)
     if (seen[i]) out.push_back(ObjectId(i));
   return out;
+}
+
+}  // namespace cellwalk::visibility
+
+namespace cellwalk::visibility {
+
+std::vector<CellId> cells_to_check(const ViewCellPartition& partition, uint64_t count) {
+  std::vector<CellId> open;
+  for (CellId c = 0; c < partition.cell_count(); ++c)
+    if (!partition.cell(c).solid) open.push_back(c);
+  if (open.size() <= count) return open;
+  std::vector<CellId> out;
+  for (uint64_t i = 0; i < count; ++i) out.push_back(open[(2 * i + 1) * open.size() / (2 * count)]);
+  return out;
+}
+
+CellCheck check_cell(const VisibilityEngine& engine, const CubeMapRenderer& cube, const ViewCell& cell,
+                     const GroundTruthOptions& options) {
+  CellCheck check;
+  check.cell = cell.id;
+  auto t0 = std::chrono::steady_clock::now();
+  const VisibleSet set = engine.compute(cell);
+  auto t1 = std::chrono::steady_clock::now();
+  const std::vector<ObjectId> truth = ground_truth_visible(cube, cell, options);
+  auto t2 = std::chrono::steady_clock::now();
+  check.engine_seconds = std::chrono::duration<double>(t1 - t0).count();
+  check.truth_seconds = std::chrono::duration<double>(t2 - t1).count();
+  check.set_size = set.objects.size();
+  check.truth_size = truth.size();
+  std::set_difference(truth.begin(), truth.end(), set.objects.begin(), set.objects.end(),
+                      std::back_inserter(check.missed));
+  check.found = truth.size() - check.missed.size();
+  return check;
 }
 
 }  // namespace cellwalk::visibility

@@ -22,12 +22,25 @@ struct OccluderParams {
 // number of triangles: the mesh bounds a solid, and crossing parity says what is inside it.
 bool is_closed(const Mesh& mesh);
 
+struct InscribedBoxes {
+  bool closed = false;  // is_closed(mesh); no boxes otherwise
+  std::vector<Aabb> boxes;
+};
+
 // Axis-aligned boxes inside the solid the closed mesh bounds (points of odd crossing parity),
-// each kept a small margin away from the surface; empty when the mesh is not closed or has
+// each kept a small margin away from the surface; none when the mesh is not closed or has
 // no interior voxel. A voxel counts as interior only when no triangle's plane and box touch
 // it and crossing rays along all three axes agree it is inside, so numerical doubt only ever
 // drops volume. The boxes may overlap; their union underestimates the solid.
-std::vector<Aabb> inscribed_boxes(const Mesh& mesh, const OccluderParams& params = {});
+InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params = {});
+
+// Boxes inside a ∪ b that reach across both: for each axis along which a and b overlap or
+// touch while their extents on the other two axes overlap with positive size, the box
+// spanning both along that axis over the common extent of the other two. Only those that
+// are contained in neither a nor b are returned. None when the
+// boxes are apart. Occluder shrinking erodes each box alone, so a seam between two abutting
+// occluders would open a gap the size of the cell; the bridge closes it (fusion across it).
+std::vector<Aabb> bridge_boxes(const Aabb& a, const Aabb& b);
 
 // Whether segment a→b meets the closed box (slab test in double precision).
 bool segment_meets_box(const Vec3& a, const Vec3& b, const Aabb& box);

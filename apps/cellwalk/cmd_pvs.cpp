@@ -1,0 +1,230 @@
+// cellwalk pvs: precompute per-view-cell visible sets (and DoVs) into a world file, in shards
+// and merged, or check an engine against the ground truth (docs/visibility.md).
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "cellwalk/error.hpp"
+#include "cellwalk/visibility.hpp"
+#include "commands.hpp"
+#include "core/progress.hpp"
+#include "visibility/ground_truth.hpp"
+#include "visibility/pvs_builder.hpp"
+
+namespace cellwalk::app {
+
+namespace {
+
+struct Args {
+  std::string world, out, engine = "sampling", cells = "grid:20", shard;
+  std::vector<std::string> merge;
+  uint64_t check = 0;
+  int gt_points = 16, gt_resolution = 1024, threads = 0;
+  EngineOptions options;
+  bool json = false;
+};
+
+double seconds_since(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+visibility::PvsRun make_run(const Args& a, const VisibilityEngine& engine) {
+  visibility::PvsRun run;
+  run.engine = engine.name();
+  run.conservative = engine.conservative();
+  const EngineOptions& o = a.options;
+  run.settings = a.cells + " points=" + std::to_string(o.sample_points) + " rays=" + std::to_string(o.rays_per_point) +
+                 " seed=" + std::to_string(o.seed) + " dov=" + std::to_string(o.dov_resolution) +
+                 (o.dov_midpoint_weights ? " midpoint" : "");
+  run.threads = a.threads;
+  if (!a.shard.empty() && std::sscanf(a.shard.c_str(), "%d/%d", &run.shard, &run.shards) != 2)
+    fail("--shard '" + a.shard + "'", "expected i/N, e.g. 0/4");
+  return run;
+}
+
+nlohmann::ordered_json sizes_json(const visibility::PvsSizes& s) {
+  return {{"cells", s.cells},
+          {"cells_with_sets", s.cells_with_sets},
+          {"ids", s.ids},
+          {"bitmask_bytes", s.bitmask_bytes},
+          {"gap_coded_bytes", s.full_bytes},
+          {"stored_bytes", s.stored_bytes},
+          {"delta_cells", s.delta_cells},
+          {"face_pairs", s.face_pairs},
+          {"face_delta_bytes", s.face_delta_bytes},
+          {"dov_bytes", s.dov_bytes}};
+}
+
+void print_sizes(const visibility::PvsSizes& s) {
+  std::printf("  %llu cells (%llu with sets), %.1f ids per set\n"
+              "  stored %llu bytes (%llu as Δs) vs %llu gap-coded vs %llu as bitmasks (%.1fx smaller)\n"
+              "  vLOD Δ per shared face: %.1f bytes over %llu pairs; dov %llu bytes\n",
+              (unsigned long long)s.cells, (unsigned long long)s.cells_with_sets,
+              double(s.ids) / double(std::max<uint64_t>(s.cells_with_sets, 1)), (unsigned long long)s.stored_bytes,
+              (unsigned long long)s.delta_cells, (unsigned long long)s.full_bytes, (unsigned long long)s.bitmask_bytes,
+              double(s.bitmask_bytes) / double(std::max<uint64_t>(s.stored_bytes, 1)),
+              double(s.face_delta_bytes) / double(std::max<uint64_t>(s.face_pairs, 1)), (unsigned long long)s.face_pairs,
+              (unsigned long long)s.dov_bytes);
+}
+
+void run_check(const Args& a, const World& world, const VisibilityEngine& engine,
+               const ViewCellPartition& partition) {
+  visibility::CubeMapRenderer cube(world, a.gt_resolution);
+  visibility::GroundTruthOptions gt;
+  gt.points = a.gt_points;
+  nlohmann::ordered_json cells = nlohmann::ordered_json::array();
+  uint64_t found = 0, truth = 0, set = 0, failing = 0;
+  double engine_s = 0, truth_s = 0, min_recall = 1.0;
+  for (CellId c : visibility::cells_to_check(partition, a.check)) {
+    const visibility::CellCheck r = visibility::check_cell(engine, cube, partition.cell(c), gt);
+    found += r.found;
+    truth += r.truth_size;
+    set += r.set_size;
+    engine_s += r.engine_seconds;
+    truth_s += r.truth_seconds;
+    min_recall = std::min(min_recall, r.recall());
+    failing += r.recall() < 1.0 ? 1 : 0;
+    cells.push_back({{"cell", c}, {"set", r.set_size}, {"truth", r.truth_size}, {"recall", r.recall()},
+                     {"tightness", r.tightness()}, {"missed", r.missed}, {"engine_seconds", r.engine_seconds},
+                     {"truth_seconds", r.truth_seconds}});
+    if (!a.json)
+      std::printf("cell %6u: set %5llu truth %5llu recall %.4f tightness %.3f  %.3f s (truth %.1f s)\n", c,
+                  (unsigned long long)r.set_size, (unsigned long long)r.truth_size, r.recall(), r.tightness(),
+                  r.engine_seconds, r.truth_seconds);
+  }
+  const double n = double(std::max<size_t>(cells.size(), 1));
+  const double recall = truth ? double(found) / double(truth) : 1.0;
+  const double tightness = truth ? double(set) / double(truth) : 1.0;
+  if (a.json) {
+    nlohmann::ordered_json j = {{"engine", engine.name()}, {"conservative", engine.conservative()},
+                                {"cells_spec", a.cells}, {"checked", cells.size()},
+                                {"truth_points", a.gt_points + 8}, {"truth_resolution", a.gt_resolution},
+                                {"recall", recall}, {"min_recall", min_recall}, {"tightness", tightness},
+                                {"cells_failing", failing}, {"engine_seconds_per_cell", engine_s / n},
+                                {"truth_seconds_per_cell", truth_s / n}, {"cells", cells}};
+    std::printf("%s\n", j.dump(2).c_str());
+  } else {
+    std::printf("check %s: %zu cells, recall %.4f (min %.4f, %llu cells below 1), tightness %.3f, %.3f s per cell\n",
+                engine.name().c_str(), cells.size(), recall, min_recall, (unsigned long long)failing, tightness,
+                engine_s / n);
+  }
+  if (engine.conservative() && failing > 0)
+    fail("pvs --check", "conservative engine '" + engine.name() + "' missed visible objects in " +
+                            std::to_string(failing) + " cells");
+}
+
+void run_merge(const Args& a, const World& world) {
+  visibility::CellSets sets;
+  std::unique_ptr<ViewCellPartition> partition;
+  visibility::PvsRun run;
+  std::vector<bool> have;
+  for (const std::string& path : a.merge) {
+    visibility::PvsPart part = visibility::read_pvs_part(path, world);
+    if (!partition) {
+      partition = std::move(part.partition);
+      run = part.run;
+      have.assign(size_t(run.shards), false);
+    } else if (serialize_partition(*part.partition) != serialize_partition(*partition) ||
+               part.run.engine != run.engine || part.run.settings != run.settings || part.run.shards != run.shards) {
+      fail(path, "is a part of a different run than " + a.merge[0]);
+    }
+    if (part.run.shard < 0 || part.run.shard >= run.shards || have[size_t(part.run.shard)])
+      fail(path, "repeats shard " + std::to_string(part.run.shard));
+    have[size_t(part.run.shard)] = true;
+    sets.merge(part.sets);
+  }
+  const std::string out = a.out.empty() ? a.world : a.out;
+  const visibility::PvsSizes sizes = visibility::write_world_with_pvs(world, out, *partition, sets, run);
+  if (a.json) {
+    std::printf("%s\n", nlohmann::ordered_json({{"world", out}, {"parts", a.merge.size()}, {"sizes", sizes_json(sizes)}}).dump(2).c_str());
+    return;
+  }
+  std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
+  print_sizes(sizes);
+}
+
+void run_compute(const Args& a, const World& world) {
+  auto setup = std::chrono::steady_clock::now();
+  const std::unique_ptr<VisibilityEngine> engine = make_engine(a.engine, world, a.options);
+  const visibility::EmbreeScene scene(world);
+  const std::unique_ptr<ViewCellPartition> partition = visibility::make_partition(a.cells, world, scene);
+  const double setup_s = seconds_since(setup);
+  const visibility::PvsRun run = make_run(a, *engine);
+  if (a.check > 0) return run_check(a, world, *engine, *partition);
+  const bool sharded = run.shards > 1;
+  const std::string out = !a.out.empty() ? a.out
+                          : sharded      ? a.world + ".part-" + std::to_string(run.shard) + "-of-" + std::to_string(run.shards)
+                                         : a.world;
+  const std::string checkpoint = sharded ? out : out + ".pvs-checkpoint";
+  std::unique_ptr<Progress> progress;
+  auto start = std::chrono::steady_clock::now();
+  uint64_t resumed = 0;
+  const visibility::CellSets sets =
+      visibility::compute_cell_sets(world, *engine, *partition, run, checkpoint, [&](uint64_t done, uint64_t total) {
+        if (!progress) {
+          progress = std::make_unique<Progress>("pvs " + engine->name(), total);
+          resumed = done;
+        }
+        progress->update(done);
+      });
+  const double compute_s = seconds_since(start);
+  progress.reset();
+  const uint64_t computed = sets.size() - resumed;
+  visibility::PvsSizes sizes;
+  if (!sharded) {
+    sizes = visibility::write_world_with_pvs(world, out, *partition, sets, run);
+    std::filesystem::remove(checkpoint);
+  }
+  uint64_t solid = 0;
+  for (CellId c = 0; c < partition->cell_count(); ++c) solid += partition->cell(c).solid ? 1 : 0;
+  const double rate = double(computed) / std::max(compute_s, 1e-9);
+  if (a.json) {
+    nlohmann::ordered_json j = {{"output", out}, {"engine", engine->name()}, {"cells_spec", a.cells},
+                                {"partition", partition->kind()}, {"cells", partition->cell_count()},
+                                {"solid_cells", solid}, {"shard", run.shard}, {"shards", run.shards},
+                                {"computed", computed}, {"resumed", resumed}, {"setup_seconds", setup_s},
+                                {"seconds", compute_s}, {"cells_per_second", rate}};
+    if (!sharded) j["sizes"] = sizes_json(sizes);
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("pvs %s: %zu %s cells (%llu solid); computed %llu (%llu resumed) in %.1f s, %.2f cells/s; setup %.1f s\n",
+              engine->name().c_str(), partition->cell_count(), partition->kind().c_str(), (unsigned long long)solid,
+              (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
+  if (!sharded) print_sizes(sizes);
+  std::printf("  wrote %s\n", out.c_str());
+}
+
+}  // namespace
+
+void register_pvs(CLI::App& root) {
+  auto* cmd = root.add_subcommand("pvs", "Precompute visible sets per view cell into a world file, or check an engine");
+  auto a = std::make_shared<Args>();
+  std::string engines;
+  for (const std::string& n : engine_names()) engines += (engines.empty() ? "" : "|") + n;
+  cmd->add_option("world", a->world, "World file (.cww)")->required();
+  cmd->add_option("--engine", a->engine, "Visibility engine: " + engines)->capture_default_str();
+  cmd->add_option("--cells", a->cells, "View cells: grid:SIZE | grid3d:SIZE | kd:SIZE | octree[:ROOT[:THRESHOLD[:DEPTH]]]")->capture_default_str();
+  cmd->add_option("--shard", a->shard, "Compute only shard i of N equal cell-id ranges into a part file (i/N)");
+  cmd->add_option("--merge", a->merge, "Merge the part files of every shard into the world")->expected(1, -1);
+  cmd->add_option("-o,--output", a->out, "World to write (default: WORLD in place; WORLD.part-i-of-N for a shard)");
+  cmd->add_option("--check", a->check, "Check the engine against ground truth on this many cells; write nothing");
+  cmd->add_option("--truth-points", a->gt_points, "Ground truth: random points per cell besides the 8 corners")->capture_default_str();
+  cmd->add_option("--truth-resolution", a->gt_resolution, "Ground truth: cube-map face resolution")->capture_default_str();
+  cmd->add_option("--points", a->options.sample_points, "Sampling: random points per cell")->capture_default_str();
+  cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str();
+  cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str();
+  cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
+  cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  cmd->add_flag("--json", a->json, "Print the report as JSON");
+  cmd->callback([a] {
+    const World world(a->world);
+    if (!a->merge.empty()) return run_merge(*a, world);
+    run_compute(*a, world);
+  });
+}
+
+}  // namespace cellwalk::app

@@ -1,0 +1,152 @@
+// A CPU cube depth buffer with conservative rasterisation of boxes.
+// Seed: 001 vLOD §5.2.2 (shrunk occluders to depth, occludees tested against it, conservative
+// rasterisation) and 000 HDoV thesis §5.5.2 (cube of six faces around the viewpoint).
+#include "visibility/depth_buffer.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace cellwalk::visibility {
+namespace {
+
+constexpr float kFar = std::numeric_limits<float>::infinity();
+
+struct FaceAxes {
+  int a, b, c;  // depth axis, u axis, w axis
+  double sign;  // of the depth axis
+};
+
+FaceAxes axes_of(int face) {
+  const int a = face / 2;
+  return {a, (a + 1) % 3, (a + 2) % 3, face % 2 == 0 ? 1.0 : -1.0};
+}
+
+// The box, relative to the eye, in a face's frame: depth range and the (u, w) extent of its
+// central projection, for the part of it at depth >= near (> 0).
+struct Footprint {
+  double u0, u1, w0, w1;
+};
+
+Footprint project(const FaceAxes& f, const glm::dvec3& lo, const glm::dvec3& hi, double near,
+                  double far) {
+  Footprint fp{std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest(),
+               std::numeric_limits<double>::max(), std::numeric_limits<double>::lowest()};
+  for (double z : {near, far})
+    for (double u : {lo[f.b], hi[f.b]})
+      for (double w : {lo[f.c], hi[f.c]}) {
+        fp.u0 = std::min(fp.u0, u / z), fp.u1 = std::max(fp.u1, u / z);
+        fp.w0 = std::min(fp.w0, w / z), fp.w1 = std::max(fp.w1, w / z);
+      }
+  return fp;
+}
+
+// Depth at which the ray eye + z·dir (dir's depth component 1) enters the box, +inf if it
+// misses. Slab test; z is the parameter because dir is scaled to unit depth.
+double entry_depth(const FaceAxes& f, const glm::dvec3& lo, const glm::dvec3& hi, double u,
+                   double w) {
+  glm::dvec3 dir;
+  dir[f.a] = f.sign, dir[f.b] = u, dir[f.c] = w;
+  double t0 = 0.0, t1 = std::numeric_limits<double>::infinity();
+  for (int axis = 0; axis < 3; ++axis) {
+    if (dir[axis] == 0.0) {
+      if (lo[axis] > 0.0 || hi[axis] < 0.0) return kFar;
+      continue;
+    }
+    double near = lo[axis] / dir[axis], far = hi[axis] / dir[axis];
+    if (near > far) std::swap(near, far);
+    t0 = std::max(t0, near);
+    t1 = std::min(t1, far);
+    if (t0 > t1) return kFar;
+  }
+  return t0;
+}
+
+double depth_range(const FaceAxes& f, const glm::dvec3& lo, const glm::dvec3& hi, bool far) {
+  return f.sign > 0 ? (far ? hi[f.a] : lo[f.a]) : (far ? -lo[f.a] : -hi[f.a]);
+}
+
+}  // namespace
+
+CubeDepthBuffer::CubeDepthBuffer(const Vec3& eye, int resolution)
+    : eye_(eye), n_(resolution), depth_(size_t(6) * resolution * resolution, kFar) {}
+
+void CubeDepthBuffer::add_occluder(const Aabb& box) {
+  const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
+  for (int face = 0; face < 6; ++face) add_to_face(face, lo, hi);
+}
+
+// A pixel is covered when the rays through its 4 corners meet the box: the directions that
+// meet a convex set form a convex set. Its depth is the largest of the 4 entry depths: each
+// slab's entry depth over the pixel is monotone in u alone or w alone (or constant, or <= 0),
+// so its maximum over the pixel's rectangle lies at a corner, and so does the maximum of
+// their maximum.
+void CubeDepthBuffer::add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi) {
+  const FaceAxes f = axes_of(face);
+  const double near = depth_range(f, lo, hi, false), far = depth_range(f, lo, hi, true);
+  if (far <= 0.0) return;
+  Footprint fp{-1.0, 1.0, -1.0, 1.0};
+  if (near > 0.0) fp = project(f, lo, hi, near, far);
+  const double scale = 0.5 * n_;
+  const int i0 = std::max(0, int(std::ceil((fp.u0 + 1.0) * scale)));
+  const int i1 = std::min(n_, int(std::floor((fp.u1 + 1.0) * scale)));
+  const int j0 = std::max(0, int(std::ceil((fp.w0 + 1.0) * scale)));
+  const int j1 = std::min(n_, int(std::floor((fp.w1 + 1.0) * scale)));
+  if (i1 <= i0 || j1 <= j0) return;
+  const int cols = i1 - i0 + 1;
+  std::vector<double> corner(size_t(cols) * (j1 - j0 + 1));
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i)
+      corner[size_t(j - j0) * cols + (i - i0)] =
+          entry_depth(f, lo, hi, i / scale - 1.0, j / scale - 1.0);
+  float* pixels = depth_.data() + size_t(face) * n_ * n_;
+  for (int j = j0; j < j1; ++j)
+    for (int i = i0; i < i1; ++i) {
+      const double* row = corner.data() + size_t(j - j0) * cols + (i - i0);
+      const double d = std::max({row[0], row[1], row[cols], row[cols + 1]});
+      if (d == kFar) continue;
+      // Round up: the stored depth may only exceed the occluder's.
+      const float stored = std::nextafter(float(d), kFar);
+      float& p = pixels[size_t(j) * n_ + i];
+      p = std::min(p, stored);
+    }
+}
+
+bool CubeDepthBuffer::hidden(const Aabb& box) const {
+  const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
+  // Points of the box seen in a face lie at depth >= their max-norm distance from the eye,
+  // hence >= the box's: clipping there keeps the projection finite.
+  double distance = 0.0;
+  for (int a = 0; a < 3; ++a) distance = std::max({distance, lo[a], -hi[a]});
+  if (distance <= 0.0) return false;
+  for (int face = 0; face < 6; ++face)
+    if (!hidden_in_face(face, lo, hi, distance)) return false;
+  return true;
+}
+
+bool CubeDepthBuffer::hidden_in_face(int face, const glm::dvec3& lo, const glm::dvec3& hi,
+                                     double distance) const {
+  const FaceAxes f = axes_of(face);
+  const double far = depth_range(f, lo, hi, true);
+  if (far < distance) return true;  // no point of the box in this face's pyramid
+  const double near = std::max(depth_range(f, lo, hi, false), distance);
+  Footprint fp = project(f, lo, hi, near, far);
+  constexpr double kPad = 1e-9;  // projection rounding: overestimate the occludee
+  fp.u0 -= kPad, fp.w0 -= kPad, fp.u1 += kPad, fp.w1 += kPad;
+  if (fp.u0 > 1.0 || fp.w0 > 1.0 || fp.u1 < -1.0 || fp.w1 < -1.0) return true;
+  const double scale = 0.5 * n_;
+  auto pixel = [&](double x) { return std::clamp(int(std::floor((x + 1.0) * scale)), 0, n_ - 1); };
+  const int i0 = pixel(fp.u0), i1 = pixel(fp.u1), j0 = pixel(fp.w0), j1 = pixel(fp.w1);
+  const float* pixels = depth_.data() + size_t(face) * n_ * n_;
+  for (int j = j0; j <= j1; ++j)
+    for (int i = i0; i <= i1; ++i)
+      if (!(double(pixels[size_t(j) * n_ + i]) < near)) return false;
+  return true;
+}
+
+double CubeDepthBuffer::covered_fraction() const {
+  const auto covered = std::count_if(depth_.begin(), depth_.end(), [](float d) { return d != kFar; });
+  return double(covered) / double(depth_.size());
+}
+
+}  // namespace cellwalk::visibility

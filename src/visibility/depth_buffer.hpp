@@ -1,0 +1,43 @@
+// A CPU cube depth buffer around one point with conservative rasterisation: occluders are
+// underestimated (a pixel takes an occluder's depth only when the occluder covers all of it,
+// and then its farthest entry depth over the pixel), occludees overestimated (every pixel
+// their box may touch, at their nearest depth).
+// Seed: 001 vLOD §5.2.2 (shrunk occluders rendered to depth from one point, occludees tested
+// against it; conservative rasterisation by alpha cut-off, here exact for boxes) and 000 HDoV
+// thesis §5.5.2 (the six faces of a cube around the viewpoint).
+#pragma once
+
+#include <vector>
+
+#include "cellwalk/geometry.hpp"
+
+namespace cellwalk::visibility {
+
+// Face f looks along axis f / 2, positive for even f. Depth is the distance along that axis.
+// Thread-safety: none; one buffer per thread.
+class CubeDepthBuffer {
+ public:
+  // REQUIRES: resolution >= 1 (pixels per face side).
+  CubeDepthBuffer(const Vec3& eye, int resolution);
+
+  // Renders a box occluder: after the call, every ray from the eye through a pixel the box
+  // covers entirely meets the box at a depth no greater than the pixel's.
+  void add_occluder(const Aabb& box);
+
+  // True only when every ray from the eye that meets `box` meets an occluder rendered before
+  // at a smaller depth. False when the box contains the eye.
+  bool hidden(const Aabb& box) const;
+
+  // Fraction of the sphere's pixels with an occluder, for reports.
+  double covered_fraction() const;
+
+ private:
+  glm::dvec3 eye_;
+  int n_;
+  std::vector<float> depth_;  // 6 faces of n × n, +inf where no occluder covers the pixel
+
+  void add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi);
+  bool hidden_in_face(int face, const glm::dvec3& lo, const glm::dvec3& hi, double near) const;
+};
+
+}  // namespace cellwalk::visibility

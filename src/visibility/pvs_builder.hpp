@@ -1,0 +1,112 @@
+// Precomputing visible sets for every view cell of a world and storing them in it: parallel
+// over cells, resumable from a checkpoint, splittable by cell range (--shard i/N) and merged.
+// The sets are stored as vLOD stores them (digest 001 §3.3–§3.4): gap-coded ids, or a Δ from a
+// face neighbour when that is smaller. HDoV thesis §5.5 (per-cell DoV). Layouts in
+// docs/format.md, "Visibility sections".
+#pragma once
+
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "cellwalk/visibility.hpp"
+#include "visibility/embree_scene.hpp"
+
+namespace cellwalk::visibility {
+
+inline constexpr const char* kCellsSection = "cells";
+inline constexpr const char* kPvsSection = "pvs";
+inline constexpr const char* kDovSection = "dov";
+
+// Builds the partition a spec names: "grid:SIZE" (2D at eye height), "grid3d:SIZE",
+// "kd:SIZE", "octree[:ROOT[:THRESHOLD[:DEPTH]]]" (THRESHOLD in level-0 triangles of the
+// visible set, measured by a light sampling engine). Cells inside objects are marked solid.
+// Throws Error on a malformed spec.
+std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const World& world,
+                                                  const EmbreeScene& scene);
+
+// The sets of one run, by cell (solid and not-yet-computed cells absent).
+using CellSets = std::map<CellId, VisibleSet>;
+
+struct PvsRun {
+  std::string engine;           // its name, stored with the sets
+  bool conservative = false;
+  std::string settings;         // everything else that changes the result (cells spec, options)
+  int shard = 0;                // this run computes shard `shard` of `shards` equal id ranges
+  int shards = 1;
+  int threads = 0;              // 0: all cores
+};
+
+// The non-solid cells of shard `shard` of `shards`: ids in [shard·C/shards, (shard+1)·C/shards).
+std::vector<CellId> shard_cells(const ViewCellPartition& partition, int shard, int shards);
+
+// Computes the sets of the run's cells in parallel, appending each to `checkpoint` as it
+// completes (created if missing; its valid records are reused, so a killed run resumes where it
+// stopped). Throws Error if the checkpoint belongs to a different run (world, cells, settings
+// or shard). `progress` is called with (cells done, cells total) from one thread at a time.
+// Returns every set of the shard, resumed and new.
+CellSets compute_cell_sets(const World& world, const VisibilityEngine& engine,
+                           const ViewCellPartition& partition, const PvsRun& run,
+                           const std::string& checkpoint,
+                           const std::function<void(uint64_t, uint64_t)>& progress = {});
+
+// A shard's result file is its completed checkpoint. Reads one (checking it against nothing but
+// itself) and returns its partition, run and sets.
+struct PvsPart {
+  std::unique_ptr<ViewCellPartition> partition;
+  PvsRun run;
+  uint64_t run_hash = 0;
+  CellSets sets;
+};
+PvsPart read_pvs_part(const std::string& path, const World& world);
+
+// What storing the sets costs.
+struct PvsSizes {
+  uint64_t cells = 0;
+  uint64_t cells_with_sets = 0;
+  uint64_t ids = 0;               // Σ set sizes
+  uint64_t bitmask_bytes = 0;     // one bitmask per cell with a set
+  uint64_t full_bytes = 0;        // every set gap-coded on its own
+  uint64_t stored_bytes = 0;      // the "pvs" records as stored (full or Δ, whichever is smaller)
+  uint64_t delta_cells = 0;       // cells stored as a Δ
+  uint64_t face_pairs = 0;        // face-adjacent pairs of cells with sets
+  uint64_t face_delta_bytes = 0;  // Σ over those pairs of the coded Δ (vLOD's per-face storage)
+  uint64_t dov_bytes = 0;
+};
+
+// Writes `out`: every section of `world` except old visibility sections, then "cells", "pvs"
+// and, if the sets carry DoVs, "dov". Atomic: nothing appears at `out` until it is complete, so
+// `out` may be the world's own path. REQUIRES: every non-solid cell has a set.
+PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
+                              const CellSets& sets, const PvsRun& run);
+
+// Reads the visibility sections of a world. Thread-safety: const methods may be called
+// concurrently.
+class StoredPvs {
+ public:
+  // Throws Error if the world has no "cells"/"pvs" sections or they are damaged.
+  explicit StoredPvs(const World& world);
+  const ViewCellPartition& partition() const { return *partition_; }
+  const std::string& engine() const { return engine_; }
+  bool conservative() const { return conservative_; }
+  bool has_dov() const { return !dov_.empty(); }
+  // The set of a cell (with DoVs when stored); nullopt for solid cells.
+  std::optional<VisibleSet> set(CellId cell) const;
+
+ private:
+  std::span<const uint8_t> record(CellId cell) const;
+  std::vector<ObjectId> decode(CellId cell, int depth) const;
+
+  std::unique_ptr<ViewCellPartition> partition_;
+  std::string engine_;
+  bool conservative_ = false;
+  uint64_t object_count_ = 0;
+  std::vector<uint8_t> pvs_;
+  std::vector<uint64_t> offsets_;  // cell_count + 1, into pvs_
+  std::vector<uint8_t> dov_;
+  std::vector<uint64_t> dov_offsets_;
+};
+
+}  // namespace cellwalk::visibility

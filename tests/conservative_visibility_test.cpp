@@ -1,0 +1,488 @@
+// Tests of the conservative from-region visibility engine: its parts (inscribed occluders,
+// the single-occluder test, the cube depth buffer, vLOD §5.3's back-face test), scenes with a
+// known answer, and the oracle: on random worlds, every object that any of many sampled rays
+// from many points of the cell hits must be in the conservative set.
+// Seeds: 001 vLOD §5.2–5.3; 000 HDoV thesis §5.5.1.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <set>
+
+#include "cellwalk/conservative_visibility.hpp"
+#include "cellwalk/import.hpp"
+#include "cellwalk/lod.hpp"
+#include "cellwalk/random.hpp"
+#include "test_support.hpp"
+#include "visibility/backface_test.hpp"
+#include "visibility/depth_buffer.hpp"
+#include "visibility/occluders.hpp"
+
+namespace cellwalk {
+namespace {
+
+using test::box_mesh;
+using test::TempDir;
+using visibility::CubeDepthBuffer;
+
+Aabb box(Vec3 lo, Vec3 hi) { return {lo, hi}; }
+
+bool contains(const Aabb& outer, const Aabb& inner) {
+  return glm::all(glm::lessThanEqual(outer.min, inner.min)) &&
+         glm::all(glm::greaterThanEqual(outer.max, inner.max));
+}
+
+Object object_of(ObjectId id, Mesh mesh) {
+  Object o;
+  o.id = id;
+  o.name = "o" + std::to_string(id);
+  o.bounds = bounds_of(mesh);
+  o.mesh = std::move(mesh);
+  return o;
+}
+
+std::vector<Object> boxes(const std::vector<Aabb>& list) {
+  std::vector<Object> out;
+  for (const Aabb& b : list) out.push_back(object_of(ObjectId(out.size()), box_mesh(b)));
+  return out;
+}
+
+// ---- occluders ----------------------------------------------------------------------------
+
+TEST(Occluders, BoxMeshGivesItselfAsOccluder) {
+  const Aabb b = box({5, 0, -10}, {8, 10, 10});
+  const auto found = visibility::inscribed_boxes(box_mesh(b));
+  ASSERT_TRUE(found.closed);
+  ASSERT_EQ(found.boxes.size(), 1u);
+  EXPECT_TRUE(contains(b, found.boxes[0]));
+  // Faces pushed out to the walls: exactly the box, so abutting boxes touch.
+  EXPECT_EQ(found.boxes[0].min, b.min);
+  EXPECT_EQ(found.boxes[0].max, b.max);
+}
+
+TEST(Occluders, OpenMeshGivesNone) {
+  Mesh m = box_mesh(box({0, 0, 0}, {1, 1, 1}));
+  m.indices.resize(m.indices.size() - 3);
+  const auto found = visibility::inscribed_boxes(m);
+  EXPECT_FALSE(found.closed);
+  EXPECT_TRUE(found.boxes.empty());
+}
+
+// An L of two boxes in one mesh: every inscribed box lies in the union.
+TEST(Occluders, BoxesLieInsideTheSolid) {
+  const Aabb a = box({0, 0, 0}, {10, 3, 3}), b = box({0, 0, 0}, {3, 3, 12});
+  Mesh m = box_mesh(a);
+  append(m, box_mesh(b));
+  // Overlapping parts: the overlap has even parity, so it is not solid for the parity rule;
+  // the boxes must avoid it as well as the outside.
+  const auto found = visibility::inscribed_boxes(m);
+  ASSERT_TRUE(found.closed);
+  ASSERT_FALSE(found.boxes.empty());
+  Random rng(3);
+  for (const Aabb& o : found.boxes)
+    for (int i = 0; i < 2000; ++i) {
+      const Vec3 p(rng.uniform(o.min.x, o.max.x), rng.uniform(o.min.y, o.max.y),
+                   rng.uniform(o.min.z, o.max.z));
+      EXPECT_NE(a.contains(p), b.contains(p)) << p.x << " " << p.y << " " << p.z;
+    }
+}
+
+TEST(Occluders, BridgesSpanAbuttingBoxes) {
+  const Aabb a = box({5, 0, -10}, {8, 10, 0}), b = box({5, 0, 0}, {8, 10, 10});
+  const auto bridges = visibility::bridge_boxes(a, b);
+  ASSERT_EQ(bridges.size(), 1u);
+  EXPECT_EQ(bridges[0].min, Vec3(5, 0, -10));
+  EXPECT_EQ(bridges[0].max, Vec3(8, 10, 10));
+  EXPECT_TRUE(visibility::bridge_boxes(a, box({9, 0, 0}, {10, 1, 1})).empty());
+}
+
+TEST(Occluders, SingleOccluderTestFromEightCorners) {
+  const Aabb cell = box({-1, 1, -1}, {1, 3, 1});
+  const Aabb wall = box({5, 0, -10}, {5.2f, 10, 10});
+  EXPECT_TRUE(visibility::occluder_hides(cell, wall, box({12, 1, -0.5f}, {13, 2, 0.5f})));
+  // Reaching past the wall's end: seen from the cell's +z side.
+  EXPECT_FALSE(visibility::occluder_hides(cell, wall, box({12, 1, 19}, {13, 2, 21})));
+  // In front of the wall.
+  EXPECT_FALSE(visibility::occluder_hides(cell, wall, box({3, 1, -0.5f}, {4, 2, 0.5f})));
+}
+
+// ---- cube depth buffer --------------------------------------------------------------------
+
+TEST(CubeDepthBuffer, OccluderHidesWhatIsBehindItOnly) {
+  CubeDepthBuffer depth(Vec3(0, 2, 0), 64);
+  depth.add_occluder(box({5, -5, -10}, {6, 10, 10}));
+  EXPECT_TRUE(depth.hidden(box({12, 1, -1}, {13, 3, 1})));
+  EXPECT_FALSE(depth.hidden(box({3, 1, -1}, {4, 3, 1})));     // in front
+  EXPECT_FALSE(depth.hidden(box({12, 1, 30}, {13, 3, 31})));  // beside
+  EXPECT_FALSE(depth.hidden(box({-1, 1, -1}, {1, 3, 1})));    // around the eye
+  EXPECT_GT(depth.covered_fraction(), 0.0);
+  EXPECT_LT(depth.covered_fraction(), 0.25);
+}
+
+// A box across several faces (around the eye's axes) is found hidden in all of them.
+TEST(CubeDepthBuffer, OccluderAroundTheEyeHidesAcrossFaces) {
+  CubeDepthBuffer depth(Vec3(0, 0, 0), 32);
+  for (int axis = 0; axis < 3; ++axis)
+    for (float side : {-1.0f, 1.0f}) {
+      Aabb shell{Vec3(-20), Vec3(20)};
+      (side > 0 ? shell.min : shell.max)[axis] = side * 10.0f;
+      depth.add_occluder(shell);
+    }
+  EXPECT_TRUE(depth.hidden(box({30, -3, -3}, {31, 3, 3})));
+  EXPECT_TRUE(depth.hidden(box({-25, -25, -25}, {25, 25, -22})));
+  EXPECT_FALSE(depth.hidden(box({8, -3, -3}, {9, 3, 3})));
+}
+
+// ---- back-face test (vLOD §5.3) -----------------------------------------------------------
+
+TEST(BackfaceTest, ConeBoundsEveryDirection) {
+  Random rng(5);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Vec3 centre = glm::normalize(Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+    const double spread = rng.uniform(0.0, 1.2);
+    std::vector<Vec3> dirs;
+    for (int i = 0; i < 20; ++i)
+      dirs.push_back(centre + float(spread) * Vec3(rng.uniform(-1, 1), rng.uniform(-1, 1), rng.uniform(-1, 1)));
+    const auto cone = visibility::bound_directions(dirs);
+    if (!cone.bounded) continue;
+    for (const Vec3& d : dirs) {
+      const double angle = std::acos(std::clamp(double(glm::dot(glm::normalize(d), cone.axis)), -1.0, 1.0));
+      EXPECT_LE(angle, cone.half_angle + 1e-4);
+    }
+  }
+  const std::vector<Vec3> opposite{{1, 0, 0}, {-1, 0, 0}};
+  EXPECT_FALSE(visibility::bound_directions(opposite).bounded);
+}
+
+TEST(BackfaceTest, BoxFacesSeenFromACellBeside) {
+  const Mesh m = box_mesh(box({5, 0, -10}, {8, 10, 10}));
+  const Aabb cell = box({-1, 1, -1}, {1, 3, 1});
+  const auto back = visibility::back_facing_triangles(m, cell);
+  int count = 0;
+  for (size_t t = 0; t < back.size(); ++t) {
+    const Vec3 n = glm::cross(m.positions[m.indices[3 * t + 1]] - m.positions[m.indices[3 * t]],
+                              m.positions[m.indices[3 * t + 2]] - m.positions[m.indices[3 * t]]);
+    // Only the −x face looks at the cell; every other face's plane has the cell behind it.
+    EXPECT_EQ(back[t], n.x >= 0) << t;
+    count += back[t];
+  }
+  EXPECT_EQ(count, 10);
+}
+
+// Hierarchical = exact per triangle, and sound against sampled viewpoints.
+TEST(BackfaceTest, HierarchyMatchesPerTriangleOnBunny) {
+  Mesh bunny = import_model(test::cgal_mesh("bunny00.off"))[0].mesh;
+  const Aabb b = bounds_of(bunny);
+  const Vec3 s = b.size();
+  const Aabb cell{b.max + s * 0.3f, b.max + s * 0.5f};
+  const auto back = visibility::back_facing_triangles(bunny, cell);
+  Random rng(7);
+  size_t flagged = 0;
+  for (size_t t = 0; t < back.size(); ++t) {
+    const Vec3 a = bunny.positions[bunny.indices[3 * t]];
+    const Vec3 n = glm::cross(bunny.positions[bunny.indices[3 * t + 1]] - a,
+                              bunny.positions[bunny.indices[3 * t + 2]] - a);
+    bool exact = true;
+    for (int i = 0; i < 8; ++i) {
+      const Vec3 c(i & 1 ? cell.max.x : cell.min.x, i & 2 ? cell.max.y : cell.min.y,
+                   i & 4 ? cell.max.z : cell.min.z);
+      exact = exact && (glm::dot(glm::dvec3(n), glm::dvec3(c) - glm::dvec3(a)) < 0.0 ||
+                        n == Vec3(0.0f));
+    }
+    if (n != Vec3(0.0f)) ASSERT_EQ(back[t], exact) << t;
+    flagged += back[t];
+    if (back[t] && t % 97 == 0) {
+      const Vec3 e(rng.uniform(cell.min.x, cell.max.x), rng.uniform(cell.min.y, cell.max.y),
+                   rng.uniform(cell.min.z, cell.max.z));
+      EXPECT_LE(glm::dot(n, e - a), 0.0f);
+    }
+  }
+  EXPECT_GT(flagged, back.size() / 4);
+  std::printf("back-facing from the cell: %zu of %zu triangles\n", flagged, back.size());
+}
+
+// ---- the oracle ---------------------------------------------------------------------------
+
+// The world's drawn geometry (level 0, decoded) and brute-force rays against it.
+class RayOracle {
+ public:
+  explicit RayOracle(const World& world) {
+    for (ObjectId id = 0; id < world.object_count(); ++id) {
+      meshes_.push_back(world.decode_level(id, 0, world.read_level(id, 0)));
+      boxes_.push_back(bounds_of(meshes_.back()));
+      std::vector<double> cdf;
+      double total = 0;
+      const Mesh& m = meshes_.back();
+      for (size_t t = 0; t < m.triangle_count(); ++t) {
+        total += glm::length(glm::cross(m.positions[m.indices[3 * t + 1]] - m.positions[m.indices[3 * t]],
+                                        m.positions[m.indices[3 * t + 2]] - m.positions[m.indices[3 * t]]));
+        cdf.push_back(total);
+      }
+      cdfs_.push_back(std::move(cdf));
+    }
+  }
+
+  // The objects first hit by rays from `points` of the cell towards random points of every
+  // object's surface (rays_per_object per point and object not yet seen).
+  std::set<ObjectId> visible(const Aabb& cell, Random& rng, int points, int rays_per_object) const {
+    std::set<ObjectId> seen;
+    for (int i = 0; i < points; ++i) {
+      const Vec3 p = sample_point(cell, i, rng);
+      for (ObjectId target = 0; target < meshes_.size(); ++target)
+        for (int r = 0; r < rays_per_object && !seen.count(target); ++r)
+          if (auto hit = first_hit(p, surface_point(target, rng))) seen.insert(*hit);
+    }
+    return seen;
+  }
+
+  // The first object the segment from → to meets (to lies on a surface: up to it, inclusive).
+  std::optional<ObjectId> first_hit(const Vec3& from, const Vec3& to) const {
+    const glm::dvec3 o(from), d = glm::dvec3(to) - o;
+    double best = 1.0 + 1e-6;
+    std::optional<ObjectId> hit;
+    for (ObjectId id = 0; id < meshes_.size(); ++id) {
+      if (!segment_near_box(o, d, boxes_[id], best)) continue;
+      const Mesh& m = meshes_[id];
+      for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const double at = intersect(o, d, m, t);
+        if (at > 1e-9 && at < best) best = at, hit = id;
+      }
+    }
+    return hit;
+  }
+
+ private:
+  std::vector<Mesh> meshes_;
+  std::vector<Aabb> boxes_;
+  std::vector<std::vector<double>> cdfs_;
+
+  // Corners first, then face points, then interior points.
+  static Vec3 sample_point(const Aabb& c, int i, Random& rng) {
+    if (i < 8)
+      return {i & 1 ? c.max.x : c.min.x, i & 2 ? c.max.y : c.min.y, i & 4 ? c.max.z : c.min.z};
+    Vec3 p(rng.uniform(c.min.x, c.max.x), rng.uniform(c.min.y, c.max.y), rng.uniform(c.min.z, c.max.z));
+    if (i % 2 == 0) {
+      const int axis = i / 2 % 3;
+      p[axis] = (i / 6) % 2 ? c.max[axis] : c.min[axis];
+    }
+    return p;
+  }
+
+  Vec3 surface_point(ObjectId id, Random& rng) const {
+    const std::vector<double>& cdf = cdfs_[id];
+    const size_t t = std::min(cdf.size() - 1, size_t(std::lower_bound(cdf.begin(), cdf.end(),
+                                                                       rng.uniform() * cdf.back()) - cdf.begin()));
+    double u = rng.uniform(), v = rng.uniform();
+    if (u + v > 1) u = 1 - u, v = 1 - v;
+    const Mesh& m = meshes_[id];
+    const Vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
+               c = m.positions[m.indices[3 * t + 2]];
+    return a + float(u) * (b - a) + float(v) * (c - a);
+  }
+
+  static bool segment_near_box(const glm::dvec3& o, const glm::dvec3& d, const Aabb& b, double limit) {
+    double t0 = 0, t1 = limit;
+    for (int a = 0; a < 3; ++a) {
+      const double lo = b.min[a] - 1e-4, hi = b.max[a] + 1e-4;
+      if (d[a] == 0) {
+        if (o[a] < lo || o[a] > hi) return false;
+        continue;
+      }
+      double n = (lo - o[a]) / d[a], f = (hi - o[a]) / d[a];
+      if (n > f) std::swap(n, f);
+      t0 = std::max(t0, n), t1 = std::min(t1, f);
+      if (t0 > t1) return false;
+    }
+    return true;
+  }
+
+  // Möller–Trumbore; the segment parameter of the hit, or -1. Edges count as hits (a ray
+  // grazing an edge sees it: the oracle leans towards "visible").
+  static double intersect(const glm::dvec3& o, const glm::dvec3& d, const Mesh& m, size_t t) {
+    const glm::dvec3 a(m.positions[m.indices[3 * t]]), b(m.positions[m.indices[3 * t + 1]]),
+        c(m.positions[m.indices[3 * t + 2]]);
+    const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
+    const double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-18) return -1;
+    const glm::dvec3 s = o - a;
+    const double u = glm::dot(s, p) / det;
+    if (u < -1e-9 || u > 1 + 1e-9) return -1;
+    const glm::dvec3 q = glm::cross(s, e1);
+    const double v = glm::dot(d, q) / det;
+    if (v < -1e-9 || u + v > 1 + 1e-9) return -1;
+    return glm::dot(e2, q) / det;
+  }
+};
+
+ConservativeParams only_shrinking() {
+  ConservativeParams p;
+  p.corner_test = false;
+  return p;
+}
+ConservativeParams only_corners() {
+  ConservativeParams p;
+  p.occluder_shrinking = false;
+  return p;
+}
+
+struct Scene {
+  TempDir dir;
+  std::unique_ptr<World> world;
+  explicit Scene(const std::vector<Object>& objects) {
+    world = std::make_unique<World>(test::write_world(dir, objects, NavGraph{}));
+  }
+  std::vector<ObjectId> visible(const Aabb& cell, const ConservativeParams& params = {}) const {
+    return make_conservative_engine(*world, params)->compute(ViewCell{0, cell, 0, false}).objects;
+  }
+  bool sees(const Aabb& cell, ObjectId id, const ConservativeParams& params = {}) const {
+    const auto set = visible(cell, params);
+    return std::binary_search(set.begin(), set.end(), id);
+  }
+};
+
+const Aabb kCell = box({-1, 1, -1}, {1, 3, 1});
+const Aabb kTarget = box({12, 1, -0.5f}, {13, 2, 0.5f});
+
+TEST(ConservativeEngine, InterfaceAndSolidCell) {
+  Scene scene(boxes({box({5, 0, -10}, {8, 10, 10}), kTarget}));
+  const auto engine = make_conservative_engine(*scene.world, {});
+  EXPECT_TRUE(engine->conservative());
+  EXPECT_EQ(engine->name(), "conservative");
+  EXPECT_TRUE(engine->compute(ViewCell{0, kCell, 0, true}).objects.empty());
+  const ConservativeStats* stats = conservative_stats(*engine);
+  ASSERT_NE(stats, nullptr);
+  EXPECT_EQ(stats->occluder_objects, 2u);
+}
+
+TEST(ConservativeEngine, WallHidesBoxBehindIt) {
+  Scene scene(boxes({box({5, 0, -10}, {8, 10, 10}), kTarget}));
+  for (const auto& params : {ConservativeParams{}, only_shrinking(), only_corners()}) {
+    EXPECT_EQ(scene.visible(kCell, params), std::vector<ObjectId>{0});
+  }
+}
+
+// Thinner than the cell: erosion by the cell leaves nothing (vLOD §5.2.2: occluders must be
+// larger than the cell); the 8-corner test still hides.
+TEST(ConservativeEngine, ThinWallHidesThroughTheCornerTestOnly) {
+  Scene scene(boxes({box({5, 0, -10}, {5.2f, 10, 10}), kTarget}));
+  EXPECT_FALSE(scene.sees(kCell, 1));
+  EXPECT_TRUE(scene.sees(kCell, 1, only_shrinking()));
+  EXPECT_FALSE(scene.sees(kCell, 1, only_corners()));
+}
+
+TEST(ConservativeEngine, GapInTheWallRevealsTheBox) {
+  Scene scene(boxes({box({5, 0, -10}, {8, 10, -0.2f}), box({5, 0, 0.2f}, {8, 10, 10}), kTarget}));
+  for (const auto& params : {ConservativeParams{}, only_shrinking(), only_corners()})
+    EXPECT_TRUE(scene.sees(kCell, 2, params));
+}
+
+// The wall ends at z = 1, the cell's +z face: the box is seen only through rays leaving the
+// cell near that face.
+TEST(ConservativeEngine, BoxSeenFromOneCornerOnlyIsVisible) {
+  const Aabb wall = box({3, 0, -10}, {4, 10, 1}), target = box({10, 1.5f, 0.5f}, {11, 2.5f, 1.3f});
+  ASSERT_FALSE(visibility::segment_meets_box(Vec3(1, 2, 1), Vec3(10, 2, 1.3f), wall));
+  ASSERT_TRUE(visibility::segment_meets_box(Vec3(0, 2, 0), Vec3(10, 2, 1.3f), wall));
+  ASSERT_TRUE(visibility::segment_meets_box(Vec3(1, 2, 0.5f), Vec3(10, 2, 1.3f), wall));
+  Scene scene(boxes({wall, target}));
+  for (const auto& params : {ConservativeParams{}, only_shrinking(), only_corners()})
+    EXPECT_TRUE(scene.sees(kCell, 1, params));
+}
+
+// Two abutting walls, the box behind their seam: neither wall hides it alone from the
+// erosion's point of view, but the bridge across the seam (both solids) does.
+TEST(ConservativeEngine, AbuttingWallsFuseAcrossTheSeam) {
+  Scene scene(boxes({box({5, 0, -10}, {8, 10, 0}), box({5, 0, 0}, {8, 10, 10}), kTarget}));
+  for (const auto& params : {ConservativeParams{}, only_shrinking(), only_corners()})
+    EXPECT_FALSE(scene.sees(kCell, 2, params));
+}
+
+// Two staggered walls, apart: each hides part of a wide box, neither all of it. Only occluder
+// fusion in the depth buffer (shrinking) hides it; the 8-corner test has no fusion.
+TEST(ConservativeEngine, StaggeredWallsHideOnlyWithFusion) {
+  const Aabb a = box({5, 0, -10}, {8, 10, 3}), b = box({10, 0, -3}, {13, 10, 10});
+  const Aabb wide = box({16, 1, -9}, {17, 2, 9});
+  Scene scene(boxes({a, b, wide}));
+  EXPECT_FALSE(visibility::occluder_hides(kCell, a, wide));
+  EXPECT_FALSE(visibility::occluder_hides(kCell, b, wide));
+  EXPECT_FALSE(scene.sees(kCell, 2));
+  EXPECT_FALSE(scene.sees(kCell, 2, only_shrinking()));
+  EXPECT_TRUE(scene.sees(kCell, 2, only_corners()));
+  // And the oracle agrees that it is hidden.
+  RayOracle oracle(*scene.world);
+  Random rng(11);
+  EXPECT_EQ(oracle.visible(kCell, rng, 60, 40).count(2), 0u);
+}
+
+// A random world of boxes (on the ground and floating, overlapping at times) and a few
+// simplified bunnies.
+std::vector<Object> random_world(uint64_t seed, const Mesh& bunny) {
+  Random rng(seed);
+  std::vector<Object> out;
+  for (int i = 0; i < 34; ++i) {
+    const Vec3 c(rng.uniform(-28, 28), 0, rng.uniform(-28, 28));
+    const Vec3 half(rng.uniform(0.3, 6), rng.uniform(0.5, 8), rng.uniform(0.3, 6));
+    const float base = rng.uniform() < 0.2 ? float(rng.uniform(0.5, 4)) : 0.0f;
+    out.push_back(object_of(ObjectId(out.size()),
+                            box_mesh(box({c.x - half.x, base, c.z - half.z},
+                                         {c.x + half.x, base + 2 * half.y, c.z + half.z}))));
+  }
+  for (int i = 0; i < 3; ++i) {
+    Mesh m = bunny;
+    const Vec3 at(rng.uniform(-25, 25), 0, rng.uniform(-25, 25));
+    transform(m, glm::translate(Mat4(1.0f), at) * glm::scale(Mat4(1.0f), Vec3(float(rng.uniform(3, 7)))));
+    out.push_back(object_of(ObjectId(out.size()), std::move(m)));
+  }
+  return out;
+}
+
+Mesh small_bunny() {
+  Mesh m = import_model(test::cgal_mesh("bunny00.off"))[0].mesh;
+  const Aabb b = bounds_of(m);
+  const float scale = 1.0f / std::max({b.size().x, b.size().y, b.size().z});
+  transform(m, glm::scale(Mat4(1.0f), Vec3(scale)) *
+                   glm::translate(Mat4(1.0f), Vec3(-b.center().x, -b.min.y, -b.center().z)));
+  const LodChain chain = build_lod_chain(m);
+  for (const LodLevel& level : chain.levels)
+    if (level.triangle_count <= 1500) return level.mesh;
+  return chain.levels.back().mesh;
+}
+
+// THE ORACLE: recall must be 100 %; tightness is reported.
+TEST(ConservativeEngine, OracleNeverMissesASampledVisibleObject) {
+  const Mesh bunny = small_bunny();
+  size_t sampled = 0, reported_default = 0, reported_shrink = 0, reported_corner = 0, cells = 0;
+  for (uint64_t seed = 1; seed <= 4; ++seed) {
+    Scene scene(random_world(seed, bunny));
+    RayOracle oracle(*scene.world);
+    const auto full = make_conservative_engine(*scene.world, {});
+    const auto shrink = make_conservative_engine(*scene.world, only_shrinking());
+    const auto corner = make_conservative_engine(*scene.world, only_corners());
+    Random rng(seed * 1000);
+    for (int c = 0; c < 6; ++c, ++cells) {
+      const Vec3 centre(rng.uniform(-25, 25), rng.uniform(1, 4), rng.uniform(-25, 25));
+      const Vec3 half(rng.uniform(0.5, 2.5), rng.uniform(0.5, 1.5), rng.uniform(0.5, 2.5));
+      const ViewCell cell{CellId(c), {centre - half, centre + half}, 0, false};
+      const std::set<ObjectId> seen = oracle.visible(cell.box, rng, 200, 12);
+      for (const auto* engine : {full.get(), shrink.get(), corner.get()}) {
+        const std::vector<ObjectId> set = engine->compute(cell).objects;
+        ASSERT_TRUE(std::is_sorted(set.begin(), set.end()));
+        for (ObjectId id : seen)
+          EXPECT_TRUE(std::binary_search(set.begin(), set.end(), id))
+              << "world " << seed << " cell " << c << " misses object " << id;
+      }
+      sampled += seen.size();
+      reported_default += full->compute(cell).objects.size();
+      reported_shrink += shrink->compute(cell).objects.size();
+      reported_corner += corner->compute(cell).objects.size();
+    }
+  }
+  std::printf("oracle: %zu cells, sampled visible %zu; tightness (set / sampled): default %.3f, "
+              "shrinking only %.3f, corners only %.3f\n",
+              cells, sampled, double(reported_default) / sampled, double(reported_shrink) / sampled,
+              double(reported_corner) / sampled);
+}
+
+}  // namespace
+}  // namespace cellwalk
