@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
-
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
@@ -23,23 +22,40 @@ std::string command_line() {
 }
 
 void register_store(CLI::App& bench) {
-  auto* cmd = bench.add_subcommand("store", "World store: build, reads, decode, cache policies -> <out>/store.md");
+  auto* cmd = bench.add_subcommand(
+      "store", "World store: build, reads, decode, cache policies -> <out>/store.md");
   struct Args {
     StoreBenchParams params;
     bool json = false;
   };
   auto args = std::make_shared<Args>();
   StoreBenchParams& p = args->params;
-  cmd->add_option("--objects", p.objects, "Objects of the generated city measured")->capture_default_str();
-  cmd->add_flag("--large", p.large, "Also generate and build a ~10^8-triangle city (long; needs ~6 GB of disk)");
-  cmd->add_option("--large-objects", p.large_objects, "Objects of the --large city")->capture_default_str();
+  cmd->add_option("--objects", p.objects, "Objects of the generated city measured")
+      ->capture_default_str();
+  cmd->add_flag("--large", p.large,
+                "Also generate and build a ~10^8-triangle city (long; needs ~6 GB of disk)");
+  cmd->add_option("--large-objects", p.large_objects, "Objects of the --large city")
+      ->capture_default_str();
   cmd->add_option("--threads", p.threads, "Build threads (0 = all cores)")->capture_default_str();
-  cmd->add_option("--frames", p.path_frames, "Frames of the walk recorded as the cache trace")->capture_default_str()->check(CLI::PositiveNumber);
-  cmd->add_option("--rounds", p.io_rounds, "Interleaved rounds of each read and decode measurement")->capture_default_str()->check(CLI::PositiveNumber);
-  cmd->add_option("--random-reads", p.random_reads, "Random 4 KiB reads per method and round")->capture_default_str()->check(CLI::PositiveNumber);
-  cmd->add_option("--budgets", p.budget_fractions, "Cache budgets as fractions of the trace's working set")->capture_default_str()->check(CLI::Range(1e-6, 1.0));
-  cmd->add_option("--out", p.out_dir, "Directory of the report (store.md and store/)")->capture_default_str();
-  cmd->add_option("--work-dir", p.work_dir, "Where the scene and world files go (default: a temporary directory)");
+  cmd->add_option("--frames", p.path_frames, "Frames of the walk recorded as the cache trace")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--rounds", p.io_rounds, "Interleaved rounds of each read and decode measurement")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--random-reads", p.random_reads, "Random 4 KiB reads per method and round")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--sequential-bytes", p.sequential_bytes, "Bytes per sequential read pass")
+      ->capture_default_str();
+  cmd->add_option("--budgets", p.budget_fractions,
+                  "Cache budgets as fractions of the trace's working set")
+      ->capture_default_str()
+      ->check(CLI::Range(1e-6, 1.0));
+  cmd->add_option("--out", p.out_dir, "Directory of the report (store.md and store/)")
+      ->capture_default_str();
+  cmd->add_option("--work-dir", p.work_dir,
+                  "Where the scene and world files go (default: a temporary directory)");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   cmd->callback([args] {
     args->params.command_line = command_line();
@@ -48,7 +64,8 @@ void register_store(CLI::App& bench) {
       std::printf("%s\n", summary.dump(2).c_str());
       return;
     }
-    for (const auto& sentence : summary["reading"]) std::printf("%s\n", sentence.get<std::string>().c_str());
+    for (const auto& sentence : summary["reading"])
+      std::printf("%s\n", sentence.get<std::string>().c_str());
     std::printf("wrote %s/store.md\n", args->params.out_dir.c_str());
   });
 }
@@ -56,7 +73,8 @@ void register_store(CLI::App& bench) {
 }  // namespace
 
 void register_bench(CLI::App& root) {
-  auto* bench = root.add_subcommand("bench", "Measure a component and write its report under docs/results/");
+  auto* bench =
+      root.add_subcommand("bench", "Measure a component and write its report under docs/results/");
   bench->require_subcommand(1);
   register_store(*bench);
 }

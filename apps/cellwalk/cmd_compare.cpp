@@ -8,36 +8,24 @@
 #include "cellwalk/walk.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
-#include "lens_options.hpp"
+#include "replay_options.hpp"
 
 namespace cellwalk::app {
 
 void register_compare(CLI::App& root) {
   auto* cmd = root.add_subcommand(
       "compare", "Render every k-th frame with a strategy and with ground truth; report the differences");
-  struct Args {
-    std::string world, path, strategy = "brute", out = "out/compare";
+  struct Args : ReplayOptions {
     CompareOptions options;
-    double budget_mib = 0;
-    bool json = false;
-    LensOptions lens;
   };
   auto args = std::make_shared<Args>();
-  cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
-  cmd->add_option("--path", args->path, "Camera path file")->required();
-  cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
+  args->add_to(*cmd, "out/compare");
   cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str();
-  cmd->add_option("-o,--output", args->out, "Output folder")->capture_default_str();
-  cmd->add_option("--budget", args->budget_mib, "Memory budget for the strategy, MiB (0 = none)")->capture_default_str();
-  cmd->add_flag("--json", args->json, "Print the summary as JSON");
-  args->lens.add_to(*cmd);
   cmd->callback([args] {
     World world(args->world);
     CameraPath path = read_path(args->path);
-    StrategyOptions options;
-    options.memory_budget_bytes = static_cast<uint64_t>(args->budget_mib * 1024 * 1024);
-    auto strategy = make_strategy(args->strategy, world, options);
+    auto strategy = make_strategy(args->strategy, world, args->strategy_options());
     auto truth = make_strategy("ground-truth", world, {});
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());

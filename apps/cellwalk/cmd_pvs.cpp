@@ -36,7 +36,7 @@ visibility::PvsRun make_run(const Args& a, const VisibilityEngine& engine) {
   run.engine = engine.name();
   run.conservative = engine.conservative();
   const EngineOptions& o = a.options;
-  run.settings = a.cells + " points=" + std::to_string(o.sample_points) + " rays=" + std::to_string(o.rays_per_point) +
+  run.settings = a.cells + " points=" + std::to_string(o.sample_points) + " rays=" + std::to_string(o.rays_per_point) + " aimed=" + std::to_string(o.aimed_rays_per_object) +
                  " seed=" + std::to_string(o.seed) + " dov=" + std::to_string(o.dov_resolution) +
                  (o.dov_midpoint_weights ? " midpoint" : "");
   run.threads = a.threads;
@@ -216,6 +216,7 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--truth-resolution", a->gt_resolution, "Ground truth: cube-map face resolution")->capture_default_str();
   cmd->add_option("--points", a->options.sample_points, "Sampling: random points per cell")->capture_default_str();
   cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str();
+  cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str();
   cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str();
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
   cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str();

@@ -6,31 +6,18 @@
 #include "cellwalk/walk.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
-#include "lens_options.hpp"
+#include "replay_options.hpp"
 
 namespace cellwalk::app {
 
 void register_walk(CLI::App& root) {
   auto* cmd = root.add_subcommand("walk", "Replay a camera path with one strategy and measure every frame");
-  struct Args {
-    std::string world, path, strategy = "brute", out = "out/walk";
-    double budget_mib = 0;
-    bool json = false;
-    LensOptions lens;
-  };
-  auto args = std::make_shared<Args>();
-  cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
-  cmd->add_option("--path", args->path, "Camera path file (cellwalk path)")->required();
-  cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
-  cmd->add_option("-o,--output", args->out, "Output folder for <strategy>.csv and <strategy>.json")->capture_default_str();
-  cmd->add_option("--budget", args->budget_mib, "Memory budget for the strategy, MiB (0 = none)")->capture_default_str();
-  cmd->add_flag("--json", args->json, "Print the summary as JSON");
-  args->lens.add_to(*cmd);
+  auto args = std::make_shared<ReplayOptions>();
+  args->add_to(*cmd, "out/walk");
   cmd->callback([args] {
     World world(args->world);
     CameraPath path = read_path(args->path);
-    StrategyOptions options;
-    options.memory_budget_bytes = static_cast<uint64_t>(args->budget_mib * 1024 * 1024);
+    const StrategyOptions options = args->strategy_options();
     auto strategy = make_strategy(args->strategy, world, options);
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());

@@ -1,0 +1,37 @@
+// Options of the commands that replay a path with a strategy (walk, compare): the world, the
+// path, the strategy and its memory budget, where to write, and the lens.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include "cellwalk/strategy.hpp"
+#include "lens_options.hpp"
+
+namespace cellwalk::app {
+
+struct ReplayOptions {
+  std::string world, path, strategy = "brute", out;
+  double budget_mib = 0;
+  bool json = false;
+  LensOptions lens;
+
+  void add_to(CLI::App& cmd, const std::string& default_out) {
+    out = default_out;
+    cmd.add_option("world", world, "World file (.cww) from cellwalk build")->required();
+    cmd.add_option("--path", path, "Camera path file (cellwalk path)")->required();
+    cmd.add_option("--strategy", strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
+    cmd.add_option("-o,--output", out, "Output folder")->capture_default_str();
+    cmd.add_option("--budget", budget_mib, "Memory budget for the strategy, MiB (0 = none); never exceeded")
+        ->capture_default_str()
+        ->check(CLI::NonNegativeNumber);
+    cmd.add_flag("--json", json, "Print the summary as JSON");
+    lens.add_to(cmd);
+  }
+  StrategyOptions strategy_options() const {
+    StrategyOptions options;
+    options.memory_budget_bytes = static_cast<uint64_t>(budget_mib * 1024 * 1024);
+    return options;
+  }
+};
+
+}  // namespace cellwalk::app
