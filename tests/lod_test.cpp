@@ -1,6 +1,7 @@
-// Tests of the LOD chains (src/lod/lod_chain.cpp): chain shape on the bunny, the recorded
-// error against a brute-force geometric oracle, cache and fetch order, the sloppy fallback,
-// and the choice of a level by pixel error.
+// Tests of the LOD chains (src/lod/lod_chain.cpp, src/lod/surface_distance.cpp): the grid
+// search against brute force, chain shape on the bunny, the recorded error against a
+// brute-force geometric oracle in both directions, cache and fetch order, the sloppy
+// fallback, and the choice of a level by pixel error.
 #include "cellwalk/lod.hpp"
 
 #include <gtest/gtest.h>
@@ -16,6 +17,7 @@
 
 #include "cellwalk/import.hpp"
 #include "cellwalk/screen_error.hpp"
+#include "lod/surface_distance.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -50,21 +52,23 @@ std::vector<Triangle> triangle_set(const Mesh& m) {
   return out;
 }
 
-// The oracle: distance from p to triangle abc by projecting onto the plane when the foot is
-// inside, else the nearest of the three edges as segments (a different method from the
-// library's Voronoi-region walk).
-float segment_distance(const Vec3& p, const Vec3& a, const Vec3& b) {
-  const Vec3 ab = b - a;
-  const float len2 = glm::dot(ab, ab);
-  const float t = len2 > 0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+// The oracle: distance from p to triangle abc in double precision, by projecting onto the
+// plane when the foot is inside, else the nearest of the three edges as segments (a
+// different method from the library's Voronoi-region walk).
+using DVec3 = glm::dvec3;
+
+double segment_distance(const DVec3& p, const DVec3& a, const DVec3& b) {
+  const DVec3 ab = b - a;
+  const double len2 = glm::dot(ab, ab);
+  const double t = len2 > 0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
   return glm::length(p - (a + t * ab));
 }
 
-float triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-  const Vec3 n = glm::cross(b - a, c - a);
-  const float n2 = glm::dot(n, n);
+double triangle_distance(const DVec3& p, const DVec3& a, const DVec3& b, const DVec3& c) {
+  const DVec3 n = glm::cross(b - a, c - a);
+  const double n2 = glm::dot(n, n);
   if (n2 > 0) {
-    const Vec3 foot = p - n * (glm::dot(p - a, n) / n2);
+    const DVec3 foot = p - n * (glm::dot(p - a, n) / n2);
     const bool inside = glm::dot(glm::cross(b - a, foot - a), n) >= 0 &&
                         glm::dot(glm::cross(c - b, foot - b), n) >= 0 &&
                         glm::dot(glm::cross(a - c, foot - c), n) >= 0;
@@ -74,33 +78,118 @@ float triangle_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3&
       {segment_distance(p, a, b), segment_distance(p, b, c), segment_distance(p, c, a)});
 }
 
-// Max over `samples` random original vertices of the distance to the nearest level triangle.
-// Brute force, skipping triangles whose bounding sphere is farther than the best so far.
-float measured_error(const Mesh& original, const Mesh& level, size_t samples) {
-  std::vector<Vec3> centre;
-  std::vector<float> radius;
-  for (size_t t = 0; t < level.indices.size(); t += 3) {
-    const Vec3 &a = level.positions[level.indices[t]], &b = level.positions[level.indices[t + 1]],
-               &c = level.positions[level.indices[t + 2]];
-    centre.push_back((a + b + c) / 3.0f);
-    radius.push_back(std::max({glm::length(a - centre.back()), glm::length(b - centre.back()),
-                               glm::length(c - centre.back())}));
+// Max over `points` of the distance to the nearest triangle of `mesh`. Brute force over
+// triangles sorted by their bounding sphere's centre x: the scan runs outward from the
+// point's x and stops once no sphere further along can be closer than the best so far.
+double max_distance(const std::vector<Vec3>& points, const Mesh& mesh) {
+  struct Sphere {
+    DVec3 centre;
+    double radius;
+    std::array<DVec3, 3> tri;
+  };
+  std::vector<Sphere> spheres;
+  double max_radius = 0;
+  for (size_t t = 0; t < mesh.indices.size(); t += 3) {
+    const std::array<DVec3, 3> tri{DVec3(mesh.positions[mesh.indices[t]]),
+                                   DVec3(mesh.positions[mesh.indices[t + 1]]),
+                                   DVec3(mesh.positions[mesh.indices[t + 2]])};
+    const DVec3 centre = (tri[0] + tri[1] + tri[2]) / 3.0;
+    const double radius = std::max({glm::length(tri[0] - centre), glm::length(tri[1] - centre),
+                                    glm::length(tri[2] - centre)});
+    spheres.push_back({centre, radius, tri});
+    max_radius = std::max(max_radius, radius);
   }
-  std::mt19937 rng(7);
-  std::uniform_int_distribution<size_t> pick(0, original.vertex_count() - 1);
-  float worst = 0;
-  for (size_t s = 0; s < samples; ++s) {
-    const Vec3& p = original.positions[pick(rng)];
-    float best = std::numeric_limits<float>::infinity();
-    for (size_t t = 0; t < centre.size(); ++t) {
-      if (glm::length(p - centre[t]) - radius[t] >= best) continue;
-      best = std::min(best, triangle_distance(p, level.positions[level.indices[3 * t]],
-                                              level.positions[level.indices[3 * t + 1]],
-                                              level.positions[level.indices[3 * t + 2]]));
+  std::sort(spheres.begin(), spheres.end(),
+            [](const Sphere& a, const Sphere& b) { return a.centre.x < b.centre.x; });
+  double worst = 0;
+  for (const Vec3& point : points) {
+    const DVec3 p(point);
+    double best = std::numeric_limits<double>::infinity();
+    auto visit = [&](const Sphere& s) {  // false once the scan may stop in this direction
+      if (std::abs(s.centre.x - p.x) - max_radius >= best) return false;
+      if (glm::length(p - s.centre) - s.radius < best) {
+        best = std::min(best, triangle_distance(p, s.tri[0], s.tri[1], s.tri[2]));
+      }
+      return true;
+    };
+    const auto mid = std::lower_bound(spheres.begin(), spheres.end(), p.x,
+                                      [](const Sphere& s, double x) { return s.centre.x < x; });
+    for (auto it = mid; it != spheres.end() && visit(*it); ++it) {
+    }
+    for (auto it = mid; it != spheres.begin() && visit(*(it - 1)); --it) {
     }
     worst = std::max(worst, best);
   }
   return worst;
+}
+
+// `count` random vertices of `mesh`.
+std::vector<Vec3> random_vertices(const Mesh& mesh, size_t count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<size_t> pick(0, mesh.vertex_count() - 1);
+  std::vector<Vec3> out(count);
+  for (Vec3& p : out) p = mesh.positions[pick(rng)];
+  return out;
+}
+
+// `count` points spread uniformly over the surface of `mesh` (area-weighted).
+std::vector<Vec3> random_surface_points(const Mesh& mesh, size_t count, uint32_t seed) {
+  std::vector<double> area(mesh.triangle_count());
+  for (size_t t = 0; t < area.size(); ++t) {
+    const Vec3 &a = mesh.positions[mesh.indices[3 * t]], &b = mesh.positions[mesh.indices[3 * t + 1]],
+               &c = mesh.positions[mesh.indices[3 * t + 2]];
+    area[t] = glm::length(glm::cross(b - a, c - a));
+  }
+  std::mt19937 rng(seed);
+  std::discrete_distribution<size_t> pick_triangle(area.begin(), area.end());
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::vector<Vec3> out(count);
+  for (Vec3& p : out) {
+    const size_t t = pick_triangle(rng);
+    float u = unit(rng), v = unit(rng);
+    if (u + v > 1.0f) u = 1.0f - u, v = 1.0f - v;
+    const Vec3& a = mesh.positions[mesh.indices[3 * t]];
+    p = a + u * (mesh.positions[mesh.indices[3 * t + 1]] - a) +
+        v * (mesh.positions[mesh.indices[3 * t + 2]] - a);
+  }
+  return out;
+}
+
+// The tolerance of the oracle comparisons: float rounding of the library's distances.
+double slack(double recorded) {
+  return recorded * 1e-4 + 1e-6;
+}
+
+// The grid search against brute force: random triangles (some degenerate: a point, a
+// segment) and query points inside, near and far outside their box, exact nearest (stop 0)
+// and with a stop distance.
+TEST(TriangleGrid, NearestMatchesBruteForce) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> coord(-1.0f, 1.0f), small(-0.05f, 0.05f);
+  Mesh m;
+  for (int t = 0; t < 400; ++t) {
+    const Vec3 a(coord(rng), coord(rng), 0.3f * coord(rng));
+    const uint32_t base = uint32_t(m.positions.size());
+    m.positions.push_back(a);
+    m.positions.push_back(t % 50 == 0 ? a : a + Vec3(small(rng), small(rng), small(rng)));
+    m.positions.push_back(t % 70 == 0 ? a : a + Vec3(small(rng), small(rng), small(rng)));
+    m.indices.insert(m.indices.end(), {base, base + 1, base + 2});
+  }
+  const TriangleGrid grid(m.positions, m.indices);
+  uint32_t hint = 0;
+  for (int q = 0; q < 2000; ++q) {
+    const float scale = q % 10 == 0 ? 20.0f : 1.2f;
+    const Vec3 p(scale * coord(rng), scale * coord(rng), scale * coord(rng));
+    const double exact = max_distance({p}, m);
+    const float nearest = std::sqrt(grid.nearest2(p, 0.0f, hint));
+    EXPECT_NEAR(nearest, exact, slack(exact)) << "query " << q;
+    const float stop = 0.1f;
+    const float early = std::sqrt(grid.nearest2(p, stop * stop, hint));
+    EXPECT_TRUE(exact > stop ? std::abs(early - exact) <= slack(exact) : early <= stop)
+        << "query " << q;
+  }
+  EXPECT_EQ(TriangleGrid({}, {}).nearest2(Vec3(0), 0.0f, hint),
+            std::numeric_limits<float>::infinity());
 }
 
 TEST(LodChain, BunnyChainShape) {
@@ -120,7 +209,9 @@ TEST(LodChain, BunnyChainShape) {
     EXPECT_GE(level.error, previous.error);
     EXPECT_GT(level.error, 0.0f);
     // ratio 0.5 unless a stall was taken over by the sloppy simplifier
-    EXPECT_LE(level.triangle_count, previous.triangle_count * 0.9 + 1);
+    if (level.method == LodMethod::kSimplify) {
+      EXPECT_LE(level.triangle_count, previous.triangle_count * 0.9 + 1);
+    }
   }
   EXPECT_LE(chain.levels.back().triangle_count, 2 * LodParams{}.min_triangles);
 }
@@ -131,19 +222,67 @@ TEST(LodChain, LevelZeroIsTheInput) {
   EXPECT_EQ(triangle_set(level0), triangle_set(bunny()));
 }
 
-// The claim behind LodLevel::error, checked by brute force on 2,000 original vertices.
-// What was found to hold (printed): meshopt's quadric error underestimates the distance:
-// measured / recorded reaches 2.04 on the bunny (1.18..2.04 over the levels), so 1.5 does
-// not hold; the assertion is 2.5 and docs/lod.md says what it means for a pixel bound.
-TEST(LodChain, RecordedErrorBoundsMeasuredDistance) {
-  const LodChain& chain = bunny_chain();
-  const float extent = glm::length(bounds_of(bunny()).size());
+// Centroids of `count` random triangles of `mesh`.
+std::vector<Vec3> random_centroids(const Mesh& mesh, size_t count, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<size_t> pick(0, mesh.triangle_count() - 1);
+  std::vector<Vec3> out(count);
+  for (Vec3& p : out) {
+    const size_t t = pick(rng);
+    p = (mesh.positions[mesh.indices[3 * t]] + mesh.positions[mesh.indices[3 * t + 1]] +
+         mesh.positions[mesh.indices[3 * t + 2]]) /
+        3.0f;
+  }
+  return out;
+}
+
+// The claim behind LodLevel::error, checked by a double-precision brute-force oracle for
+// every level: 2,000 random original vertices → level, and 2,000 random level vertices and
+// triangle centroids → original, never exceed the recorded error (the first holds by
+// construction when every original vertex is measured). Points spread over the level's
+// surface are not covered by the claim: measured, they exceed it by at most 1.035 on these
+// meshes; the test allows 1.1 so that a regression shows. Printed: the ratios.
+void expect_recorded_error_bounds_oracle(const Mesh& original, const LodChain& chain) {
+  const std::vector<Vec3> vertices = random_vertices(original, 2000, 7);
   for (size_t i = 1; i < chain.levels.size(); ++i) {
     const LodLevel& level = chain.levels[i];
-    const float measured = measured_error(bunny(), level.mesh, 2000);
-    std::printf("level %2zu: %6zu triangles, recorded %.5f, measured %.5f, ratio %.2f\n", i,
-                level.triangle_count, level.error, measured, measured / level.error);
-    EXPECT_LE(measured, level.error * 2.5f + 1e-5f * extent) << "level " << i;
+    std::vector<Vec3> level_points = random_vertices(level.mesh, 1000, uint32_t(i));
+    const std::vector<Vec3> centroids = random_centroids(level.mesh, 1000, uint32_t(i));
+    level_points.insert(level_points.end(), centroids.begin(), centroids.end());
+    const double to_level = max_distance(vertices, level.mesh);
+    const double to_original = max_distance(level_points, original);
+    const double surface_to_original =
+        max_distance(random_surface_points(level.mesh, 2000, uint32_t(i)), original);
+    std::printf("level %2zu: %6zu triangles, recorded %.5g; ratio to it: vertices->level %.3f, "
+                "level samples->original %.3f, level surface->original %.3f\n",
+                i, level.triangle_count, level.error, to_level / level.error,
+                to_original / level.error, surface_to_original / level.error);
+    EXPECT_LE(to_level, level.error + slack(level.error)) << "level " << i;
+    EXPECT_LE(to_original, level.error + slack(level.error)) << "level " << i;
+    EXPECT_LE(surface_to_original, 1.1 * level.error) << "level " << i;
+  }
+}
+
+TEST(LodChain, RecordedErrorBoundsOracleOnBunny) {
+  expect_recorded_error_bounds_oracle(bunny(), bunny_chain());
+}
+
+TEST(LodChain, RecordedErrorBoundsOracleOnArmadillo) {
+  const Mesh armadillo = import_model(test::cgal_mesh("armadillo.off")).at(0).mesh;
+  expect_recorded_error_bounds_oracle(armadillo, build_lod_chain(armadillo));
+}
+
+// With fewer samples than vertices, the error is still at least meshopt's estimate and
+// non-decreasing, and never above the all-vertex measurement.
+TEST(LodChain, SampledErrorIsAtMostTheFullMeasurement) {
+  LodParams few;
+  few.error_samples = 500;
+  const LodChain sampled = build_lod_chain(bunny(), few);
+  const LodChain& full = bunny_chain();
+  ASSERT_EQ(sampled.levels.size(), full.levels.size());
+  for (size_t i = 1; i < full.levels.size(); ++i) {
+    EXPECT_LE(sampled.levels[i].error, full.levels[i].error) << "level " << i;
+    EXPECT_GE(sampled.levels[i].error, sampled.levels[i - 1].error) << "level " << i;
   }
 }
 
@@ -179,7 +318,7 @@ TEST(LodChain, LevelsAreCacheAndFetchOptimised) {
 
 // A triangle soup (a wavy 48×48 grid whose triangles share no vertex): every edge is a
 // border, so the topology-preserving simplifier stalls and the sloppy one, which welds by
-// position, must take over.
+// position, must take over. Its levels' errors bound the oracle too.
 TEST(LodChain, StallFallsBackToSloppyWithMeasuredError) {
   Mesh soup;
   auto height = [](int x, int z) { return 0.5f * std::sin(x * 0.3f) * std::cos(z * 0.2f); };
@@ -201,9 +340,8 @@ TEST(LodChain, StallFallsBackToSloppyWithMeasuredError) {
     sloppy = sloppy || level.method == LodMethod::kSloppy;
     EXPECT_LT(level.triangle_count, chain.levels[i - 1].triangle_count);
     EXPECT_GE(level.error, chain.levels[i - 1].error);
-    if (level.method == LodMethod::kSloppy) {
-      EXPECT_LE(measured_error(soup, level.mesh, 500), level.error * 1.5f + 1e-4f);
-    }
+    EXPECT_LE(max_distance(random_vertices(soup, 500, 3), level.mesh),
+              level.error + slack(level.error));
   }
   EXPECT_TRUE(sloppy);
 }
@@ -238,7 +376,7 @@ TEST(LodSelect, BunnyLevelsCoarsenWithDistance) {
   const Lens lens;
   const Aabb box = bounds_of(bunny());
   size_t last = 0;
-  for (float d = 0.0f; d < 300.0f; d += 0.05f) {
+  for (float d = 0.0f; d < 3000.0f; d = d * 1.01f + 0.01f) {
     const float ppu = pixels_per_unit(d, lens);
     const size_t i = select_level(chain, ppu, 1.0f);
     EXPECT_GE(i, last);

@@ -27,6 +27,7 @@ TEST(StoreBench, WritesReportWithSaneFigures) {
   params.path_frames = 40;
   params.io_rounds = 2;
   params.random_reads = 32;
+  params.sequential_bytes = 4 << 20;
   params.budget_fractions = {0.05, 0.2, 0.5, 1.0};
   params.out_dir = dir.file("results");
   params.work_dir = dir.file("work");
@@ -35,11 +36,13 @@ TEST(StoreBench, WritesReportWithSaneFigures) {
 
   const std::filesystem::path out = params.out_dir;
   const std::string md = slurp(out / "store.md");
-  for (const char* heading : {"## Build", "## Reads", "## Decode", "## Cache policies", "## Reading"}) {
+  for (const char* heading :
+       {"## Build", "## Reads", "## Decode", "## Cache policies", "## Reading"}) {
     EXPECT_NE(md.find(heading), std::string::npos) << heading;
   }
   EXPECT_NE(md.find(params.command_line), std::string::npos);
-  for (const char* file : {"build.csv", "io.csv", "decode.csv", "cache.csv", "summary.json", "hit_ratio.svg"}) {
+  for (const char* file :
+       {"build.csv", "io.csv", "decode.csv", "cache.csv", "summary.json", "hit_ratio.svg"}) {
     EXPECT_GT(std::filesystem::file_size(out / "store" / file), 0u) << file;
   }
 

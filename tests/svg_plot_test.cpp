@@ -45,7 +45,8 @@ TEST(SvgPlot, EmptyAndDegenerateDataStillRender) {
 
 void expect_ticks(const std::vector<double>& got, const std::vector<double>& want) {
   ASSERT_EQ(got.size(), want.size());
-  for (size_t i = 0; i < want.size(); ++i) EXPECT_NEAR(got[i], want[i], 1e-12 * std::abs(want[i])) << i;
+  for (size_t i = 0; i < want.size(); ++i)
+    EXPECT_NEAR(got[i], want[i], 1e-12 * std::abs(want[i])) << i;
 }
 
 TEST(SvgPlot, TicksAreOneTwoFiveSteps) {

@@ -15,7 +15,7 @@ namespace cellwalk {
 
 struct ConservativeParams {
   // Pixels per side of each of the 6 faces of the cube depth buffer around the cell.
-  int face_resolution = 128;
+  int face_resolution = 64;
   // Voxels along the longest side of an object's box when its inscribed occluder boxes are
   // derived (the solid is classified on this grid).
   int occluder_grid = 24;
@@ -41,6 +41,7 @@ struct ConservativeStats {
   uint64_t occluder_objects = 0;  // objects with at least one inscribed box
   uint64_t occluder_boxes = 0;    // inscribed boxes
   uint64_t bridges = 0;           // boxes across two touching inscribed boxes
+  double mean_fill = 0.0;         // mean over objects of largest box volume / object box volume
   double occluder_seconds = 0.0;  // to decode the meshes and derive the boxes
 };
 

@@ -35,8 +35,12 @@ class VisibilityEngine {
 struct EngineOptions {
   // Sampling: rays are cast from corners, face centres, the centre and this many random points
   // on the faces and inside, each over this many directions spread over the whole sphere.
-  int sample_points = 24;
+  int sample_points = 64;
   int rays_per_point = 4096;
+  // Sampling: besides the sphere, this many rays from each point at random points of every
+  // object's bounding box. Uniform directions are ~3° apart at 4096 rays, so small distant
+  // objects fall between them; aimed rays find those at a cost linear in the object count.
+  int aimed_rays_per_object = 4;
   uint64_t seed = 1;
   // DoV: cube-map face resolution (pixels per side) at each of the cell's 8 corners.
   int dov_resolution = 256;

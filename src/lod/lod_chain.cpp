@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 
 #include "cellwalk/lod.hpp"
 #include "lod/surface_distance.hpp"
@@ -19,20 +20,17 @@ const float* position_data(const Mesh& mesh) {
   return &mesh.positions[0].x;
 }
 
-// The original vertices whose distance to every level is measured (all of them up to
-// params.error_samples, else that many evenly spaced by index).
-std::vector<Vec3> original_samples(const Mesh& original, size_t samples) {
-  const std::vector<Vec3>& v = original.positions;
-  if (v.size() <= samples) return v;
-  std::vector<Vec3> out;
-  out.reserve(samples);
-  for (size_t i = 0; i < samples; ++i) out.push_back(v[i * v.size() / samples]);
+// The level-0 vertices whose distance to every level is measured: all of them up to
+// `samples`, else that many evenly spaced by index.
+std::vector<uint32_t> original_samples(size_t vertex_count, size_t samples) {
+  std::vector<uint32_t> out(std::min(vertex_count, samples));
+  for (size_t i = 0; i < out.size(); ++i) out[i] = uint32_t(i * vertex_count / out.size());
   return out;
 }
 
 // Points of the level whose distance to the original is measured: its triangles'
-// centroids. Its vertices need no measuring: both simplifiers keep a subset of the source's
-// vertices, unmoved, so every level's vertices are original vertices (distance 0).
+// centroids. Its vertices need no measuring: both simplifiers return indices into their
+// source's vertices, so every level's vertices are original vertices (distance 0).
 std::vector<Vec3> level_samples(const Mesh& level) {
   std::vector<Vec3> out;
   out.reserve(level.triangle_count());
@@ -44,45 +42,62 @@ std::vector<Vec3> level_samples(const Mesh& level) {
   return out;
 }
 
-// The original as measured against: its triangles in a grid and its sampled vertices.
+// The original (level 0) as measured against: its triangles in a grid, its vertices and
+// which of them are sampled.
 struct Original {
   TriangleGrid triangles;
-  std::vector<Vec3> samples;
+  std::vector<Vec3> positions;
+  std::vector<uint32_t> samples;
 };
 
-// REQUIRES: `mesh` is compacted (level 0), so that only vertices in use are sampled.
-Original original_of(const Mesh& mesh, size_t samples) {
-  return {TriangleGrid(mesh.positions, mesh.indices), original_samples(mesh, samples)};
+Original original_of(const Mesh& level0, size_t samples) {
+  return {TriangleGrid(level0.positions, level0.indices), level0.positions,
+          original_samples(level0.vertex_count(), samples)};
 }
 
+// A level as built: its mesh and, per vertex, that vertex's index in level 0.
+struct BuiltLevel {
+  Mesh mesh;
+  std::vector<uint32_t> original_ids;
+};
+
 // max(floor, distance from the sampled original vertices to the level's triangles,
-// distance from the level's sample points to the original's triangles).
-float measured_error(const Original& original, const Mesh& level, float floor) {
-  const TriangleGrid level_triangles(level.positions, level.indices);
-  float worst2 = max_nearest2(level_triangles, original.samples, floor * floor);
-  worst2 = max_nearest2(original.triangles, level_samples(level), worst2);
+// distance from the level's centroids to the original's triangles). Sampled vertices that
+// the level kept are skipped: they lie on it.
+float measured_error(const Original& original, const BuiltLevel& level, float floor) {
+  std::vector<uint8_t> kept(original.positions.size(), 0);
+  for (uint32_t id : level.original_ids) kept[id] = 1;
+  std::vector<Vec3> removed;
+  for (uint32_t i : original.samples) {
+    if (!kept[i]) removed.push_back(original.positions[i]);
+  }
+  const TriangleGrid level_triangles(level.mesh.positions, level.mesh.indices);
+  float worst2 = max_nearest2(level_triangles, removed, floor * floor);
+  worst2 = max_nearest2(original.triangles, level_samples(level.mesh), worst2);
   return std::sqrt(worst2);
 }
 
-// The level made of `indices` (into mesh's vertices): cache-ordered triangles, vertices
-// reordered by first use and compacted, attributes carried along.
-Mesh optimised_level(const Mesh& mesh, std::vector<uint32_t> indices) {
-  const size_t vertex_count = mesh.vertex_count();
+// The level made of `indices` (into source's vertices): cache-ordered triangles, vertices
+// reordered by first use and compacted, attributes and original ids carried along.
+BuiltLevel optimised_level(const Mesh& source, const std::vector<uint32_t>& source_ids,
+                           std::vector<uint32_t> indices) {
+  const size_t vertex_count = source.vertex_count();
   meshopt_optimizeVertexCache(indices.data(), indices.data(), indices.size(), vertex_count);
   std::vector<uint32_t> remap(vertex_count);
   const size_t unique =
       meshopt_optimizeVertexFetchRemap(remap.data(), indices.data(), indices.size(), vertex_count);
-  Mesh level;
-  level.indices.resize(indices.size());
-  meshopt_remapIndexBuffer(level.indices.data(), indices.data(), indices.size(), remap.data());
+  BuiltLevel level;
+  level.mesh.indices.resize(indices.size());
+  meshopt_remapIndexBuffer(level.mesh.indices.data(), indices.data(), indices.size(), remap.data());
   auto remap_stream = [&](const auto& src, auto& dst) {
     if (src.empty()) return;
     dst.resize(unique);
     meshopt_remapVertexBuffer(dst.data(), src.data(), vertex_count, sizeof(src[0]), remap.data());
   };
-  remap_stream(mesh.positions, level.positions);
-  remap_stream(mesh.normals, level.normals);
-  remap_stream(mesh.colors, level.colors);
+  remap_stream(source.positions, level.mesh.positions);
+  remap_stream(source.normals, level.mesh.normals);
+  remap_stream(source.colors, level.mesh.colors);
+  remap_stream(source_ids, level.original_ids);
   return level;
 }
 
@@ -121,13 +136,13 @@ Simplified simplify_to(const Mesh& source, size_t target_triangles, const LodPar
 
 LodChain build_lod_chain(const Mesh& mesh, const LodParams& params) {
   LodChain chain;
-  LodLevel first;
-  first.mesh = optimised_level(mesh, mesh.indices);
-  first.triangle_count = mesh.triangle_count();
-  chain.levels.push_back(std::move(first));
+  BuiltLevel built = optimised_level(mesh, {}, mesh.indices);
+  chain.levels.push_back({std::move(built.mesh), mesh.triangle_count(), 0.0f, LodMethod::kOriginal});
   if (chain.levels[0].triangle_count <= params.min_triangles) return chain;
 
   const Original original = original_of(chain.levels[0].mesh, params.error_samples);
+  built.original_ids.resize(original.positions.size());
+  std::iota(built.original_ids.begin(), built.original_ids.end(), 0u);
   while (chain.levels.back().triangle_count > params.min_triangles) {
     const LodLevel& previous = chain.levels.back();
     const size_t target = std::max<size_t>(
@@ -135,13 +150,10 @@ LodChain build_lod_chain(const Mesh& mesh, const LodParams& params) {
     Simplified s = simplify_to(previous.mesh, target, params);
     const size_t triangles = s.indices.size() / 3;
     if (triangles == 0 || triangles >= previous.triangle_count) break;  // no progress
-    LodLevel level;
-    level.triangle_count = triangles;
-    level.method = s.method;
-    level.mesh = optimised_level(previous.mesh, std::move(s.indices));
+    built = optimised_level(previous.mesh, built.original_ids, std::move(s.indices));
     // Measured against the original, not the previous level: errors do not accumulate.
-    level.error = measured_error(original, level.mesh, std::max(s.error, previous.error));
-    chain.levels.push_back(std::move(level));
+    const float error = measured_error(original, built, std::max(s.error, previous.error));
+    chain.levels.push_back({std::move(built.mesh), triangles, error, s.method});
   }
   return chain;
 }

@@ -22,6 +22,17 @@ float max_component(const Vec3& v) {
   return std::max({v.x, v.y, v.z});
 }
 
+// Bits 0, 1, 2 … of v moved to bits 0, 3, 6 …: one axis of a Morton key (21 bits).
+uint64_t spread_bits(uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffff;
+  v = (v | v << 16) & 0x1f0000ff0000ff;
+  v = (v | v << 8) & 0x100f00f00f00f00f;
+  v = (v | v << 4) & 0x10c30c30c30c30c3;
+  v = (v | v << 2) & 0x1249249249249249;
+  return v;
+}
+
 float length2(const Vec3& v) {
   return glm::dot(v, v);
 }
@@ -36,10 +47,14 @@ float segment_distance2(const Vec3& ap, const Vec3& ab) {
 
 }  // namespace
 
-// Ericson's Voronoi-region walk; edges go through segment_distance2, which also covers
-// zero-length edges.
+// Ericson's Voronoi-region walk. It assumes a proper triangle: with a zero-length edge it
+// can settle on that edge's region, so degenerate triangles are taken as their edges.
 float point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
   const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  if (!(length2(glm::cross(ab, ac)) > 0)) {
+    return std::min({segment_distance2(ap, ab), segment_distance2(ap, ac),
+                     segment_distance2(p - b, c - b)});
+  }
   const float d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
   if (d1 <= 0 && d2 <= 0) return length2(ap);
   const Vec3 bp = p - b;
@@ -54,10 +69,10 @@ float point_triangle_distance2(const Vec3& p, const Vec3& a, const Vec3& b, cons
   if (vb <= 0 && d2 >= 0 && d6 <= 0) return segment_distance2(ap, ac);
   const float va = d3 * d6 - d5 * d4;
   if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) return segment_distance2(bp, c - b);
-  const float area2 = va + vb + vc;  // |ab × ac|², 0 for a degenerate triangle
+  const float area2 = va + vb + vc;  // |ab × ac|², which rounding can still make 0
   if (!(area2 > 0)) {
     return std::min({segment_distance2(ap, ab), segment_distance2(ap, ac),
-                      segment_distance2(bp, c - b)});
+                     segment_distance2(bp, c - b)});
   }
   return length2(ap - ab * (vb / area2) - ac * (vc / area2));
 }
@@ -107,9 +122,10 @@ double TriangleGrid::cells_in(const Aabb& box) const {
   return double(hi[0] - lo[0] + 1) * double(hi[1] - lo[1] + 1) * double(hi[2] - lo[2] + 1);
 }
 
-// Counting sort of (cell, triangle) pairs into cell_start_ / entries_.
+// Counting sort of (cell, triangle) pairs into cells_ / entries_, with the occupied cells'
+// runs laid out in Morton order: a run of nearby queries then reads nearby memory.
 void TriangleGrid::fill_cells(const std::vector<Entry>& triangles, const std::vector<Aabb>& boxes) {
-  cell_start_.assign(size_t(dims_[0]) * dims_[1] * dims_[2] + 1, 0);
+  cells_.assign(size_t(dims_[0]) * dims_[1] * dims_[2], {0, 0});
   auto for_each_cell = [&](const Aabb& box, auto fn) {
     const Cell lo = cell_of(box.min), hi = cell_of(box.max);
     for (int z = lo[2]; z <= hi[2]; ++z) {
@@ -118,10 +134,22 @@ void TriangleGrid::fill_cells(const std::vector<Entry>& triangles, const std::ve
       }
     }
   };
-  for (const Aabb& box : boxes) for_each_cell(box, [&](size_t i) { ++cell_start_[i + 1]; });
-  for (size_t i = 1; i < cell_start_.size(); ++i) cell_start_[i] += cell_start_[i - 1];
-  entries_.resize(cell_start_.back());
-  std::vector<uint32_t> cursor(cell_start_.begin(), cell_start_.end() - 1);
+  for (const Aabb& box : boxes) for_each_cell(box, [&](size_t i) { ++cells_[i].count; });
+  std::vector<std::pair<uint64_t, uint32_t>> occupied;  // (Morton key, cell)
+  for (uint32_t i = 0; i < cells_.size(); ++i) {
+    if (cells_[i].count == 0) continue;
+    const uint32_t x = i % dims_[0], y = i / dims_[0] % dims_[1], z = i / dims_[0] / dims_[1];
+    occupied.push_back({spread_bits(x) | spread_bits(y) << 1 | spread_bits(z) << 2, i});
+  }
+  std::sort(occupied.begin(), occupied.end());
+  uint32_t next = 0;
+  for (const auto& [key, i] : occupied) {
+    cells_[i].start = next;
+    next += cells_[i].count;
+  }
+  entries_.resize(next);
+  std::vector<uint32_t> cursor(cells_.size());
+  for (size_t i = 0; i < cells_.size(); ++i) cursor[i] = cells_[i].start;
   for (size_t t = 0; t < triangles.size(); ++t) {
     for_each_cell(boxes[t], [&](size_t i) { entries_[cursor[i]++] = triangles[t]; });
   }
@@ -160,7 +188,7 @@ float TriangleGrid::nearest2(const Vec3& p, float stop2, uint32_t& hint) const {
   // True once a triangle within stop2 is found.
   auto visit = [&](int x, int y, int z) {
     const size_t i = cell_index(x, y, z);
-    for (uint32_t e = cell_start_[i]; e < cell_start_[i + 1]; ++e) {
+    for (uint32_t e = cells_[i].start, end = e + cells_[i].count; e < end; ++e) {
       const Entry& tri = entries_[e];
       // The box test rejects most of a cell's triangles for the price of a few compares.
       const Vec3 lo = glm::min(tri.a, glm::min(tri.b, tri.c));

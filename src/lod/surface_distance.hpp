@@ -61,7 +61,10 @@ class TriangleGrid {
   float inverse_cell_size_ = 1.0f;
   float slack_ = 0.0f;  // float rounding of cell coordinates, subtracted from gaps
   Cell dims_{1, 1, 1};
-  std::vector<uint32_t> cell_start_;  // CSR: cell i holds entries_[start[i], start[i+1])
+  struct Run {
+    uint32_t start, count;
+  };
+  std::vector<Run> cells_;  // cell i holds entries_[start, start + count)
   std::vector<Entry> entries_;
 };
 

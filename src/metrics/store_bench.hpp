@@ -13,10 +13,9 @@
 #pragma once
 
 #include <cstdint>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 namespace cellwalk {
 
@@ -27,9 +26,12 @@ struct StoreBenchParams {
   uint64_t large_objects = 60000;  // docs/generators.md: 106 M triangles at 1 % landmarks
   // Build threads. 1 by default so build and the single-threaded references share a core.
   int threads = 1;
-  int path_frames = 600;        // frames of the walk whose requests make the cache trace
-  int io_rounds = 5;            // interleaved rounds of each I/O and decode measurement
+  int path_frames = 1800;        // frames of the walk whose requests make the cache trace (60 s)
+  int io_rounds = 5;             // interleaved rounds of each I/O and decode measurement
   uint64_t random_reads = 2000;  // 4 KiB reads per method and round
+  // Bytes per sequential pass; the geometry section is read round and round until this many,
+  // so a small world still gives a pass long enough to time.
+  uint64_t sequential_bytes = 64ull << 20;
   std::vector<double> budget_fractions = {0.02, 0.05, 0.1, 0.2, 0.3, 0.5, 0.75, 1.0};
   std::string out_dir = "docs/results";
   // Scene and world files; empty = a fresh directory under the system's temporary directory,

@@ -20,11 +20,20 @@ std::string escape(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -149,11 +158,13 @@ std::string render_svg(const LinePlot& plot) {
     }
   }
   const auto [x_lo, x_hi] = data_range(plot, true);
-  const auto [y_lo, y_hi] = plot.y_min < plot.y_max ? std::pair{plot.y_min, plot.y_max} : data_range(plot, false);
+  const auto [y_lo, y_hi] =
+      plot.y_min < plot.y_max ? std::pair{plot.y_min, plot.y_max} : data_range(plot, false);
   const Scale x{x_lo, x_hi, kLeft, plot.width - kRight, plot.log_x};
   const Scale y{y_lo, y_hi, plot.height - kBottom, kTop, false};
-  return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + number(plot.width) + "\" height=\"" +
-         number(plot.height) + "\" font-family=\"sans-serif\" font-size=\"12\">\n" +
+  return "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" + number(plot.width) +
+         "\" height=\"" + number(plot.height) +
+         "\" font-family=\"sans-serif\" font-size=\"12\">\n" +
          "<rect width=\"100%\" height=\"100%\" fill=\"#fff\"/>\n" + axes(x, y, plot) +
          series_lines(x, y, plot) + "</svg>\n";
 }

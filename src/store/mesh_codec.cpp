@@ -166,6 +166,8 @@ size_t body_bound(const Header& h) {
 std::vector<uint8_t> zstd_body(ByteReader& r, const Header& h) {
   const uint32_t raw_size = r.get<uint32_t>("zstd raw size");
   if (raw_size > body_bound(h)) r.error("zstd raw size too large for the mesh's counts");
+  // An empty frame is damage; checked here because get_array must not copy 0 bytes from null.
+  if (r.remaining() == 0) r.error("missing zstd frame");
   const std::vector<uint8_t> frame = r.get_array<uint8_t>(r.remaining(), "zstd frame");
   std::vector<uint8_t> raw(raw_size);
   const size_t n = ZSTD_decompress(raw.data(), raw.size(), frame.data(), frame.size());
@@ -174,9 +176,17 @@ std::vector<uint8_t> zstd_body(ByteReader& r, const Header& h) {
   return raw;
 }
 
+// One length-prefixed codec stream. meshopt's codecs never write an empty one, so an empty
+// one is damage (and get_array must not copy 0 bytes from null).
+std::vector<uint8_t> get_stream(ByteReader& r, std::string_view what) {
+  const uint32_t length = r.get<uint32_t>(what);
+  if (length == 0) r.error("empty " + std::string(what) + " stream");
+  return r.get_array<uint8_t>(length, what);
+}
+
 // Decodes one vertex stream into `count` records of `size` bytes.
 void get_vertex_stream(ByteReader& r, void* out, size_t count, size_t size, std::string_view what) {
-  const std::vector<uint8_t> enc = r.get_array<uint8_t>(r.get<uint32_t>(what), what);
+  const std::vector<uint8_t> enc = get_stream(r, what);
   if (meshopt_decodeVertexBuffer(out, count, size, enc.data(), enc.size()) != 0) {
     r.error(std::string("damaged ") + std::string(what));
   }
@@ -227,7 +237,7 @@ void get_normals(ByteReader& r, const Header& h, Mesh& mesh) {
 }
 
 void get_indices(ByteReader& r, const Header& h, Mesh& mesh) {
-  const std::vector<uint8_t> enc = r.get_array<uint8_t>(r.get<uint32_t>("indices"), "indices");
+  const std::vector<uint8_t> enc = get_stream(r, "indices");
   mesh.indices.resize(h.index_count);
   if (meshopt_decodeIndexBuffer(mesh.indices.data(), mesh.indices.size(), sizeof(uint32_t),
                                 enc.data(), enc.size()) != 0) {

@@ -52,8 +52,6 @@ class CellTree : public ViewCellPartition {
       if (nodes_[n].cell == kNoCell) continue;
       if (nodes_[n].cell >= cells_.size()) cells_.resize(nodes_[n].cell + 1);
       cells_[nodes_[n].cell] = ViewCell{nodes_[n].cell, nodes_[n].box, nodes_[n].depth, nodes_[n].solid};
-      node_of_cell_.resize(cells_.size());
-      node_of_cell_[nodes_[n].cell] = n;
     }
   }
 
@@ -122,7 +120,6 @@ class CellTree : public ViewCellPartition {
   RootGrid grid_;
   std::vector<FlatNode> nodes_;
   std::vector<ViewCell> cells_;
-  std::vector<uint32_t> node_of_cell_;
 };
 
 // Appends the subtree's children after their parent, contiguously (breadth-first per node).

@@ -10,6 +10,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <mutex>
 #include <thread>
 
@@ -65,6 +66,17 @@ bool too_small(const Aabb& box, const Vec3& eye, int resolution) {
   return glm::length(box.size()) < distance * 0.6 / resolution;
 }
 
+double volume(const Aabb& b) {
+  const Vec3 s = glm::max(b.size(), Vec3(0.0f));
+  return double(s.x) * s.y * s.z;
+}
+
+double largest_fill(const std::vector<Aabb>& boxes, const Aabb& bounds) {
+  double largest = 0.0;
+  for (const Aabb& b : boxes) largest = std::max(largest, volume(b));
+  return volume(bounds) > 0.0 ? largest / volume(bounds) : 0.0;
+}
+
 class ConservativeEngineImpl final : public VisibilityEngine {
  public:
   ConservativeEngineImpl(const World& world, const ConservativeParams& params)
@@ -89,15 +101,18 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     if (cell.solid) return out;
     const Aabb& c = cell.box;
     CubeDepthBuffer depth(c.center(), params_.face_resolution);
+    // Viewpoints of the cell must lie outside the occluder's solid for its parity argument.
+    std::vector<std::pair<double, const Occluder*>> usable;
+    for (const Occluder& o : occluders_)
+      if (!world_.object(o.object).bounds.overlaps(c) && !world_.object(o.other).bounds.overlaps(c))
+        usable.push_back({distance_between(o.box, c), &o});
+    // Front to back: pixels the near occluders cover skip the far ones' work.
+    std::sort(usable.begin(), usable.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
     std::vector<const Occluder*> near;
-    for (const Occluder& o : occluders_) {
-      // Viewpoints of the cell must lie outside the occluder's solid for its parity argument.
-      if (world_.object(o.object).bounds.overlaps(c) ||
-          world_.object(o.other).bounds.overlaps(c))
-        continue;
-      if (params_.occluder_shrinking) render_shrunk(o.box, c, depth);
-      if (params_.corner_test && distance_between(o.box, c) <= params_.corner_test_radius)
-        near.push_back(&o);
+    for (const auto& [distance, o] : usable) {
+      if (params_.occluder_shrinking) render_shrunk(o->box, c, depth);
+      if (params_.corner_test && distance <= params_.corner_test_radius) near.push_back(o);
     }
     for (ObjectId id = 0; id < occludees_.size(); ++id)
       if (!hidden(id, c, depth, near)) out.objects.push_back(id);
@@ -111,10 +126,14 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   std::vector<Occluder> occluders_;  // ascending object ids
   ConservativeStats stats_;
 
+  // Two sound shrinkings, each better where the other is weak: the erosion by the whole cell
+  // (seen from any direction), and the per-face lateral one (no loss along the view axis,
+  // so thin and deep occluders survive, but a larger loss at oblique pixels).
   void render_shrunk(const Aabb& occluder, const Aabb& cell, CubeDepthBuffer& depth) const {
+    if (too_small(occluder, cell.center(), params_.face_resolution)) return;
     const Aabb s = shrunk(occluder, cell);
-    if (s.empty() || too_small(s, cell.center(), params_.face_resolution)) return;
-    depth.add_occluder(s);
+    if (!s.empty()) depth.add_occluder(s);
+    depth.add_occluder_for_cell(occluder, cell.size() * 0.5f);
   }
 
   bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth,
@@ -162,6 +181,8 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (size_t id = 0; id < count; ++id) {
       stats_.closed_objects += per_object[id].closed;
       stats_.occluder_objects += !per_object[id].boxes.empty();
+      stats_.mean_fill += largest_fill(per_object[id].boxes, world_.object(ObjectId(id)).bounds) /
+                          double(count);
       for (const Aabb& b : per_object[id].boxes)
         occluders_.push_back({pulled_in(b), ObjectId(id), ObjectId(id)});
     }

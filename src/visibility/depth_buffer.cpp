@@ -71,44 +71,50 @@ double depth_range(const FaceAxes& f, const glm::dvec3& lo, const glm::dvec3& hi
 CubeDepthBuffer::CubeDepthBuffer(const Vec3& eye, int resolution)
     : eye_(eye), n_(resolution), depth_(size_t(6) * resolution * resolution, kFar) {}
 
-void CubeDepthBuffer::add_occluder(const Aabb& box) {
+void CubeDepthBuffer::add_occluder(const Aabb& box) { add_occluder_for_cell(box, Vec3(0.0f)); }
+
+void CubeDepthBuffer::add_occluder_for_cell(const Aabb& box, const Vec3& half) {
   const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
-  for (int face = 0; face < 6; ++face) add_to_face(face, lo, hi);
+  for (int face = 0; face < 6; ++face) add_to_face(face, lo, hi, glm::dvec3(half));
 }
 
-// A pixel is covered when the rays through its 4 corners meet the box: the directions that
-// meet a convex set form a convex set. Its depth is the largest of the 4 entry depths: each
-// slab's entry depth over the pixel is monotone in u alone or w alone (or constant, or <= 0),
-// so its maximum over the pixel's rectangle lies at a corner, and so does the maximum of
-// their maximum.
-void CubeDepthBuffer::add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi) {
+// Per pixel, the box eroded laterally by the pixel's bound (none for a point cell). A pixel
+// is covered when the rays through its 4 corners meet that box: the directions that meet a
+// convex set form a convex set. Its depth is the largest of the 4 entry depths: each slab's
+// entry depth over the pixel is monotone in u alone or w alone (or constant, or <= 0), so its
+// maximum over the pixel's rectangle lies at a corner, and so does the maximum of their
+// maximum.
+void CubeDepthBuffer::add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi,
+                                  const glm::dvec3& half) {
   const FaceAxes f = axes_of(face);
   const double near = depth_range(f, lo, hi, false), far = depth_range(f, lo, hi, true);
-  if (far <= 0.0) return;
-  Footprint fp{-1.0, 1.0, -1.0, 1.0};
+  const bool point = half == glm::dvec3(0.0);
+  if (far <= 0.0 || (!point && near < half[f.a])) return;  // the cell must lie before the box
+  Footprint fp{-1.0, 1.0, -1.0, 1.0};  // a box across the eye's plane may cover it all
   if (near > 0.0) fp = project(f, lo, hi, near, far);
   const double scale = 0.5 * n_;
   const int i0 = std::max(0, int(std::ceil((fp.u0 + 1.0) * scale)));
   const int i1 = std::min(n_, int(std::floor((fp.u1 + 1.0) * scale)));
   const int j0 = std::max(0, int(std::ceil((fp.w0 + 1.0) * scale)));
   const int j1 = std::min(n_, int(std::floor((fp.w1 + 1.0) * scale)));
-  if (i1 <= i0 || j1 <= j0) return;
-  const int cols = i1 - i0 + 1;
-  std::vector<double> corner(size_t(cols) * (j1 - j0 + 1));
-  for (int j = j0; j <= j1; ++j)
-    for (int i = i0; i <= i1; ++i)
-      corner[size_t(j - j0) * cols + (i - i0)] =
-          entry_depth(f, lo, hi, i / scale - 1.0, j / scale - 1.0);
   float* pixels = depth_.data() + size_t(face) * n_ * n_;
   for (int j = j0; j < j1; ++j)
     for (int i = i0; i < i1; ++i) {
-      const double* row = corner.data() + size_t(j - j0) * cols + (i - i0);
-      const double d = std::max({row[0], row[1], row[cols], row[cols + 1]});
+      float& pixel = pixels[size_t(j) * n_ + i];
+      if (double(pixel) <= std::max(near, 0.0)) continue;  // nearer already: no gain
+      const double u0 = i / scale - 1.0, u1 = (i + 1) / scale - 1.0;
+      const double w0 = j / scale - 1.0, w1 = (j + 1) / scale - 1.0;
+      const double erode_u = half[f.b] + half[f.a] * std::max(std::abs(u0), std::abs(u1));
+      const double erode_w = half[f.c] + half[f.a] * std::max(std::abs(w0), std::abs(w1));
+      glm::dvec3 elo = lo, ehi = hi;
+      elo[f.b] += erode_u, ehi[f.b] -= erode_u;
+      elo[f.c] += erode_w, ehi[f.c] -= erode_w;
+      if (elo[f.b] > ehi[f.b] || elo[f.c] > ehi[f.c]) continue;
+      const double d = std::max({entry_depth(f, elo, ehi, u0, w0), entry_depth(f, elo, ehi, u1, w0),
+                                 entry_depth(f, elo, ehi, u0, w1), entry_depth(f, elo, ehi, u1, w1)});
       if (d == kFar) continue;
       // Round up: the stored depth may only exceed the occluder's.
-      const float stored = std::nextafter(float(d), kFar);
-      float& p = pixels[size_t(j) * n_ + i];
-      p = std::min(p, stored);
+      pixel = std::min(pixel, std::nextafter(float(d), kFar));
     }
 }
 

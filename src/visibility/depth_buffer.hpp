@@ -24,6 +24,14 @@ class CubeDepthBuffer {
   // covers entirely meets the box at a depth no greater than the pixel's.
   void add_occluder(const Aabb& box);
 
+  // Renders `box` shrunk for a box cell centred on the eye with half-extents `half`, per face
+  // along the face's two lateral axes only, by half + half_depth · |slope| (the largest slope
+  // over each pixel), and only in faces where the box lies wholly beyond the cell. Whatever
+  // this hides from the eye, the unshrunk box hides from every point of the cell: a segment
+  // from a cell point to the occludee crosses the box's depth at a lateral offset of at most
+  // that much from the eye's ray (derivation in docs/conservative-visibility.md).
+  void add_occluder_for_cell(const Aabb& box, const Vec3& half);
+
   // True only when every ray from the eye that meets `box` meets an occluder rendered before
   // at a smaller depth. False when the box contains the eye.
   bool hidden(const Aabb& box) const;
@@ -36,7 +44,7 @@ class CubeDepthBuffer {
   int n_;
   std::vector<float> depth_;  // 6 faces of n × n, +inf where no occluder covers the pixel
 
-  void add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi);
+  void add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& half);
   bool hidden_in_face(int face, const glm::dvec3& lo, const glm::dvec3& hi, double near) const;
 };
 

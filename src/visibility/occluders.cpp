@@ -95,11 +95,19 @@ double edge(double ax, double ay, double bx, double by, double px, double py) {
   return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
 }
 
-// Crossing parity of every voxel's sample point along rays parallel to `axis`; voxels whose
-// ray passes exactly through an edge or vertex get `inside` cleared (parity in doubt).
-void vote_parity(const Grid& g, const Mesh& mesh, int axis, std::vector<uint8_t>& inside) {
+// Counts crossings along rays parallel to `axis` through every voxel's sample point and
+// clears `inside` where the point is outside: winding number 0 (signed crossings, for a
+// consistently oriented mesh: inside any of several overlapping closed parts counts), else
+// even parity. Voxels whose ray passes exactly through an edge or vertex are cleared too.
+void vote_inside(const Grid& g, const Mesh& mesh, int axis, bool winding,
+                 std::vector<uint8_t>& inside) {
   const int b = (axis + 1) % 3, c = (axis + 2) % 3;
-  std::vector<std::vector<double>> hits(size_t(g.n) * g.n);
+  struct Hit {
+    double at;
+    int sign;
+    bool operator<(const Hit& o) const { return at < o.at; }
+  };
+  std::vector<std::vector<Hit>> hits(size_t(g.n) * g.n);
   std::vector<uint8_t> doubtful(size_t(g.n) * g.n, 0);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     std::array<glm::dvec3, 3> p;
@@ -125,23 +133,26 @@ void vote_parity(const Grid& g, const Mesh& mesh, int axis, std::vector<uint8_t>
           continue;
         }
         const double sum = e0 + e1 + e2;
-        hits[column].push_back((e0 * p[0][axis] + e1 * p[1][axis] + e2 * p[2][axis]) / sum);
+        hits[column].push_back({(e0 * p[0][axis] + e1 * p[1][axis] + e2 * p[2][axis]) / sum,
+                                winding ? (sum > 0 ? 1 : -1) : 1});
       }
   }
   for (int j = 0; j < g.n; ++j)
     for (int i = 0; i < g.n; ++i) {
       const size_t column = size_t(j) * g.n + i;
-      std::vector<double>& h = hits[column];
+      std::vector<Hit>& h = hits[column];
       std::sort(h.begin(), h.end());
       size_t crossed = 0;
+      int count = 0;  // signed crossings (winding) or crossings (parity) before the sample
       for (int k = 0; k < g.n; ++k) {
         const double s = g.sample(axis, k);
-        while (crossed < h.size() && h[crossed] < s) ++crossed;
-        const bool exact = crossed < h.size() && h[crossed] == s;
+        for (; crossed < h.size() && h[crossed].at < s; ++crossed) count += h[crossed].sign;
+        const bool exact = crossed < h.size() && h[crossed].at == s;
         Cell cell;
         cell[axis] = k, cell[b] = i, cell[c] = j;
         const size_t v = g.index(cell[0], cell[1], cell[2]);
-        if (doubtful[column] || exact || crossed % 2 == 0) inside[v] = 0;
+        const bool outside = winding ? count == 0 : count % 2 == 0;
+        if (doubtful[column] || exact || outside) inside[v] = 0;
       }
     }
 }
@@ -284,6 +295,26 @@ std::vector<Aabb> boxes_in(const Grid& g, const std::vector<uint8_t>& interior,
 
 }  // namespace
 
+bool is_oriented(const Mesh& mesh) {
+  const std::vector<uint32_t> id = welded_ids(mesh);
+  std::vector<std::pair<uint64_t, int>> edges;
+  edges.reserve(mesh.indices.size());
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
+    for (int e = 0; e < 3; ++e) {
+      const uint32_t a = id[mesh.indices[t + e]], b = id[mesh.indices[t + (e + 1) % 3]];
+      if (a != b) edges.push_back({uint64_t(std::min(a, b)) << 32 | std::max(a, b), a < b ? 1 : -1});
+    }
+  std::sort(edges.begin(), edges.end());
+  for (size_t i = 0; i < edges.size();) {
+    int sum = 0;
+    size_t j = i;
+    for (; j < edges.size() && edges[j].first == edges[i].first; ++j) sum += edges[j].second;
+    if (sum != 0) return false;
+    i = j;
+  }
+  return true;
+}
+
 bool is_closed(const Mesh& mesh) {
   const std::vector<uint32_t> id = welded_ids(mesh);
   std::vector<uint64_t> edges;
@@ -318,7 +349,8 @@ InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params) {
   std::vector<uint8_t> surface(g.size(), 0);
   mark_surface(g, mesh, surface);
   std::vector<uint8_t> interior(g.size(), 1);
-  for (int axis = 0; axis < 3; ++axis) vote_parity(g, mesh, axis, interior);
+  const bool winding = is_oriented(mesh);
+  for (int axis = 0; axis < 3; ++axis) vote_inside(g, mesh, axis, winding, interior);
   for (size_t v = 0; v < g.size(); ++v) interior[v] = interior[v] && !surface[v];
   for (const Aabb& box : boxes_in(g, interior, params))
     out.boxes.push_back(extend_to_surface(mesh, box));

@@ -27,7 +27,13 @@ struct InscribedBoxes {
   std::vector<Aabb> boxes;
 };
 
-// Axis-aligned boxes inside the solid the closed mesh bounds (points of odd crossing parity),
+// True when, in addition, every edge is used as often in one direction as in the other: the
+// triangles are consistently oriented, and the winding number says what is inside.
+bool is_oriented(const Mesh& mesh);
+
+// Axis-aligned boxes inside the solid the closed mesh bounds (points of non-zero winding
+// number when the mesh is oriented, which counts overlapping closed parts as solid; else of
+// odd crossing parity),
 // each kept a small margin away from the surface; none when the mesh is not closed or has
 // no interior voxel. A voxel counts as interior only when no triangle's plane and box touch
 // it and crossing rays along all three axes agree it is inside, so numerical doubt only ever

@@ -1,7 +1,8 @@
 // Sampling visibility with Embree rays (vLOD §5 as sampling; HDoV thesis §5.5.2 sample points):
 // from the cell's corners, face centres, centre and random points inside and on its faces, a
-// ray in each of `rays_per_point` directions spread evenly over the sphere; the union of first
-// hits is the visible set. It may miss objects (docs/visibility.md).
+// ray in each of `rays_per_point` directions spread evenly over the sphere, and rays aimed at
+// random points of every object's box; the union of first hits is the visible set. It may miss
+// objects (docs/visibility.md).
 #include "visibility/sampling_engine.hpp"
 
 #include <algorithm>
@@ -44,7 +45,7 @@ uint64_t box_seed(const Aabb& box, uint64_t seed) {
 }  // namespace
 
 SamplingEngine::SamplingEngine(const World& world, const EngineOptions& options)
-    : options_(options), scene_(world), directions_(fibonacci_sphere(options.rays_per_point)) {
+    : world_(world), options_(options), scene_(world), directions_(fibonacci_sphere(options.rays_per_point)) {
   far_ = 2.0f * glm::length(world.info().bounds.size()) + 1.0f;
 }
 
@@ -58,6 +59,14 @@ VisibleSet SamplingEngine::compute(const ViewCell& cell) const {
     const glm::quat q = random_rotation(rng);
     for (const Vec3& d : directions_)
       if (auto id = scene_.first_hit(p, q * d, far_)) hits.push_back(*id);
+    for (ObjectId target = 0; target < world_.object_count(); ++target) {
+      const Aabb& b = world_.object(target).bounds;
+      for (int k = 0; k < options_.aimed_rays_per_object; ++k) {
+        const Vec3 at(rng.uniform(b.min.x, b.max.x), rng.uniform(b.min.y, b.max.y), rng.uniform(b.min.z, b.max.z));
+        if (at == p) continue;
+        if (auto id = scene_.first_hit(p, glm::normalize(at - p), far_)) hits.push_back(*id);
+      }
+    }
     // Keep the list short: most rays hit the same few objects.
     std::sort(hits.begin(), hits.end());
     hits.erase(std::unique(hits.begin(), hits.end()), hits.end());

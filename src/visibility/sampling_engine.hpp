@@ -1,5 +1,6 @@
 // The sampling visibility engine: Embree rays from many points of a cell over the whole
-// sphere (vLOD §5 samples; HDoV thesis §5.5.2 uses the 8 corners). Fast and aggressive: an
+// sphere and aimed at every object's box (vLOD §5 samples; HDoV thesis §5.5.2 uses the 8
+// corners). Fast and aggressive: an
 // object seen only through a gap no ray passes is missed, so it is not conservative.
 #pragma once
 
@@ -17,6 +18,7 @@ class SamplingEngine : public VisibilityEngine {
   VisibleSet compute(const ViewCell& cell) const override;
 
  private:
+  const World& world_;
   EngineOptions options_;
   EmbreeScene scene_;
   std::vector<Vec3> directions_;  // a Fibonacci sphere, rotated per point
