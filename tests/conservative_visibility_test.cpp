@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -510,70 +509,6 @@ TEST(ConservativeEngine, OracleNeverMissesASampledVisibleObject) {
               double(reported_corner) / sampled);
 }
 
-// Measures the engine on a built world named by CELLWALK_CONSERVATIVE_WORLD (e.g. the
-// 2,000-object city): cells of 10 × 2 × 10 m (CELLWALK_CONSERVATIVE_CELL_SIZE in x and z) at
-// eye height 1–3 m centred on the navigation graph's nodes (at most CELLWALK_CONSERVATIVE_CELLS of them, default 512), computed on 2
-// threads; and on every 16th cell the sampling engine's set, which must be inside the
-// conservative one (recall), for tightness. Skipped when the variable is unset.
-TEST(ConservativeEngine, MeasureOnAWorld) {
-  const char* path = std::getenv("CELLWALK_CONSERVATIVE_WORLD");
-  if (!path) GTEST_SKIP() << "set CELLWALK_CONSERVATIVE_WORLD to a world file to measure";
-  const char* limit = std::getenv("CELLWALK_CONSERVATIVE_CELLS");
-  const size_t max_cells = limit ? size_t(std::atoll(limit)) : 512;
-  const char* size = std::getenv("CELLWALK_CONSERVATIVE_CELL_SIZE");
-  const float half = 0.5f * (size ? float(std::atof(size)) : 10.0f);
-  const World world(path);
-  using Clock = std::chrono::steady_clock;
-  const auto t0 = Clock::now();
-  const auto engine = make_conservative_engine(world, {});
-  const double setup = std::chrono::duration<double>(Clock::now() - t0).count();
-  const ConservativeStats& stats = *conservative_stats(*engine);
-  std::printf("world: %zu objects, %llu triangles; occluders: %llu closed meshes, %llu objects "
-              "with boxes, %llu boxes, %llu bridges, mean fill %.2f, %.1f s\n",
-              world.object_count(), (unsigned long long)world.triangle_count(),
-              (unsigned long long)stats.closed_objects, (unsigned long long)stats.occluder_objects,
-              (unsigned long long)stats.occluder_boxes, (unsigned long long)stats.bridges, stats.mean_fill,
-              setup);
-
-  const std::vector<Vec3>& nodes = world.info().nav.nodes;
-  ASSERT_FALSE(nodes.empty());
-  std::vector<ViewCell> cells;
-  const size_t count = std::min(max_cells, nodes.size());
-  for (size_t i = 0; i < count; ++i) {
-    const Vec3 n = nodes[i * nodes.size() / count];
-    cells.push_back({CellId(i), {Vec3(n.x - half, 1, n.z - half), Vec3(n.x + half, 3, n.z + half)}, 0, false});
-  }
-  std::vector<VisibleSet> sets(cells.size());
-  std::atomic<size_t> next{0};
-  const auto t1 = Clock::now();
-  auto work = [&] {
-    for (size_t i; (i = next++) < cells.size();) sets[i] = engine->compute(cells[i]);
-  };
-  std::thread a(work), b(work);
-  a.join(), b.join();
-  const double seconds = std::chrono::duration<double>(Clock::now() - t1).count();
-  size_t total = 0;
-  for (const VisibleSet& s : sets) total += s.objects.size();
-  std::printf("conservative: %zu cells in %.2f s on 2 threads: %.1f cells/s; mean set %.1f "
-              "objects (%.1f %% of the world)\n",
-              cells.size(), seconds, cells.size() / seconds, double(total) / cells.size(),
-              100.0 * total / cells.size() / world.object_count());
-
-  const auto sampling = make_engine("sampling", world);
-  size_t sampled = 0, reported = 0, checked = 0;
-  for (size_t i = 0; i < cells.size(); i += 16, ++checked) {
-    const std::vector<ObjectId> seen = sampling->compute(cells[i]).objects;
-    for (ObjectId id : seen)
-      EXPECT_TRUE(std::binary_search(sets[i].objects.begin(), sets[i].objects.end(), id))
-          << "cell " << i << " misses object " << id;
-    sampled += seen.size();
-    reported += sets[i].objects.size();
-  }
-  std::printf("against sampling on %zu cells: sampled visible %.1f, conservative %.1f, "
-              "tightness %.2f\n",
-              checked, double(sampled) / checked, double(reported) / checked,
-              double(reported) / double(sampled));
-}
 
 }  // namespace
 }  // namespace cellwalk

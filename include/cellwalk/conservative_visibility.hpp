@@ -1,5 +1,5 @@
-// The conservative from-region visibility engine: never drops an object visible from a point
-// of the view cell (outside every occluder's solid; see docs/conservative-visibility.md).
+// The conservative from-region visibility engine: never drops an object visible from any point
+// of the view cell (the guarantee, its proof and its limits: docs/conservative-visibility.md).
 // Seeds: 001 vLOD §5.2 (occluder shrinking, rendered from one point of the cell into a depth
 // buffer with conservative rasterisation) and 000 HDoV thesis §5.5.1 (a convex occluder that
 // hides an object from the cell's 8 corners hides it from the whole box cell).
