@@ -330,6 +330,7 @@ TEST(StratifiedCity, HasAppendixAParts) {
 TEST(Plant, DetailScalesTrianglesAndParts) {
   PlantParams p;
   p.units_x = p.units_z = 1;
+  p.detail = 1;
   CheckingSink low, high;
   generate_plant(p, low);
   p.detail = 3;

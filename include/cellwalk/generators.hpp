@@ -38,8 +38,8 @@ SceneInfo generate_stratified_city(const StratifiedCityParams& params, ObjectSin
 // An industrial plant standing in for the UNC Power Plant: pipes, tanks, boilers, walkways,
 // ladders, many small parts, long sight lines along its aisles.
 struct PlantParams {
-  int units_x = 4, units_z = 4;  // process units on a grid separated by aisles
-  double detail = 1.0;           // scales tessellation and part counts
+  int units_x = 8, units_z = 8;  // process units on a grid separated by aisles
+  double detail = 2.0;           // scales tessellation and part counts
   uint64_t seed = 1;
 };
 SceneInfo generate_plant(const PlantParams& params, ObjectSink& sink);
