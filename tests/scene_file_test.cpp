@@ -45,15 +45,8 @@ std::vector<Object> write_scene(const std::string& file, int count, uint64_t see
   return objects;
 }
 
-std::vector<uint8_t> slurp(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-void spit(const std::string& file, const std::vector<uint8_t>& bytes) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-}
+using test::slurp;
+using test::spit;
 
 TEST(SceneFile, RoundTripsObjectsAndInfo) {
   test::TempDir dir;

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <array>
+#include <fstream>
 #include <atomic>
 #include <cstdio>
 #include <unistd.h>
@@ -26,6 +27,16 @@ std::string assimp_model(const std::string& relative) {
   if (!std::filesystem::exists(p))
     ADD_FAILURE() << p << " is missing: run scripts/setup to install assimp-testmodels";
   return p;
+}
+
+std::vector<uint8_t> slurp(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), {}};
+}
+
+void spit(const std::string& file, const std::vector<uint8_t>& bytes) {
+  std::ofstream out(file, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
 TempDir::TempDir() {

@@ -2,7 +2,9 @@
 #pragma once
 
 #include <filesystem>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace cellwalk::test {
 
@@ -13,6 +15,10 @@ std::string source_path(const std::string& relative);
 std::string cgal_mesh(const std::string& name);
 // A model from Debian's assimp-testmodels, e.g. assimp_model("glTF2/.../2CylinderEngine.glb").
 std::string assimp_model(const std::string& relative);
+
+// A whole file's bytes, and writing bytes as a whole file (replacing it).
+std::vector<uint8_t> slurp(const std::string& file);
+void spit(const std::string& file, const std::vector<uint8_t>& bytes);
 
 // A fresh empty directory, removed when the object goes out of scope.
 class TempDir {

@@ -15,15 +15,8 @@
 namespace cellwalk {
 namespace {
 
-std::vector<uint8_t> slurp(const std::string& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), {}};
-}
-
-void spit(const std::string& file, const std::vector<uint8_t>& bytes) {
-  std::ofstream out(file, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
-}
+using test::slurp;
+using test::spit;
 
 TEST(WorldFile, SectionsRoundTripAcrossPageBoundaries) {
   test::TempDir dir;
