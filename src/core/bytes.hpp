@@ -65,6 +65,7 @@ class ByteReader {
   std::vector<T> get_array(uint64_t count, std::string_view what) {
     if (count > remaining() / sizeof(T)) too_short(count * sizeof(T), what);
     std::vector<T> values(count);
+    if (count == 0) return values;  // memcpy's pointers must not be null, even for 0 bytes
     std::memcpy(values.data(), bytes_.data() + pos_, count * sizeof(T));
     pos_ += count * sizeof(T);
     return values;
