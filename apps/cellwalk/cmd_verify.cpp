@@ -20,9 +20,10 @@ void register_verify(CLI::App& root) {
       progress->update(done);
     });
     progress.reset();
-    std::printf("verify: %s is intact: %llu pages of %u bytes, %zu sections, %zu objects\n", file->c_str(),
-                (unsigned long long)pages, world.file().page_size(), world.file().sections().size(),
-                world.object_count());
+    std::printf("verify: %s is intact: header, tables and %llu data pages of %u bytes checked (%llu pages in all), "
+                "%zu sections, %zu objects\n",
+                file->c_str(), (unsigned long long)(pages - 1), world.file().page_size(),
+                (unsigned long long)world.file().page_count(), world.file().sections().size(), world.object_count());
   });
 }
 
