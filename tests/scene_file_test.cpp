@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -150,6 +151,44 @@ TEST(SceneFile, EveryTruncationIsCaught) {
     spit(bad, std::vector<uint8_t>(bytes.begin(), bytes.begin() + static_cast<long>(n)));
     EXPECT_THROW(SceneReader{bad}, Error) << "truncated to " << n;
   }
+}
+
+// A crafted trailer whose offsets would wrap around 2^64 when added is refused before any
+// allocation (it once asked for exabytes).
+TEST(SceneFile, TrailerOffsetsThatWouldWrapAreRefused) {
+  test::TempDir dir;
+  const std::string file = dir.file("a.cwscene");
+  write_scene(file, 2);
+  auto bytes = slurp(file);
+  const uint64_t end = bytes.size();
+  for (uint64_t offset : {uint64_t{1} << 63, ~uint64_t{0} - (uint64_t{1} << 35)}) {
+    const uint64_t size = (end - 24) - offset;  // wraps: offset + size == end - 24 modulo 2^64
+    std::memcpy(bytes.data() + end - 24, &offset, 8);
+    std::memcpy(bytes.data() + end - 16, &size, 8);
+    spit(file, bytes);
+    try {
+      SceneReader r(file);
+      FAIL() << "accepted a wrapped footer offset";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("footer position"), std::string::npos) << e.what();
+    }
+  }
+}
+
+// A damaged object record fails the build with one clear line, from any worker thread, and
+// leaves no temporary file behind.
+TEST(SceneFile, DamagedRecordFailsTheBuildCleanly) {
+  test::TempDir dir;
+  const std::string file = dir.file("a.cwscene");
+  write_scene(file, 40);
+  auto bytes = slurp(file);
+  SceneReader reader(file);
+  bytes[reader.entry(33).offset + 40] ^= 0xFF;  // inside object 33's payload
+  spit(file, bytes);
+  auto r = test::run_cellwalk("build " + file + " --threads 2 -o " + dir.file("w.cww"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("object 33: checksum mismatch"), std::string::npos) << r.output;
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1);
 }
 
 TEST(SceneFile, ClearErrorsForWrongKindsOfInput) {

@@ -29,7 +29,7 @@ void register_compare(CLI::App& root) {
     auto truth = make_strategy("ground-truth", world, {});
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());
-    std::filesystem::create_directories(args->out);
+    args->make_output_folder();
     args->options.image_dir = args->options.max_images > 0 ? args->out : "";
     Progress progress("compare " + args->strategy, path.frames.size());
     auto frames = compare(path, args->lens.lens(), *strategy, *truth, renderer, args->options,

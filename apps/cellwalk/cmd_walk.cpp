@@ -17,6 +17,7 @@ void register_walk(CLI::App& root) {
   cmd->callback([args] {
     World world(args->world);
     CameraPath path = read_path(args->path);
+    args->make_output_folder();
     const StrategyOptions options = args->strategy_options();
     auto strategy = make_strategy(args->strategy, world, options);
     auto context = GlContext::headless();
@@ -27,7 +28,6 @@ void register_walk(CLI::App& root) {
     progress.finish();
     WalkSummary summary = summarize(strategy->name(), frames);
     summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
-    std::filesystem::create_directories(args->out);
     const std::string stem = args->out + "/" + strategy->name();
     write_frames_csv(frames, stem + ".csv");
     write_summary_json(summary, stem + ".json");

@@ -4,6 +4,10 @@
 
 #include <CLI/CLI.hpp>
 
+#include <filesystem>
+
+#include "cellwalk/error.hpp"
+
 #include "cellwalk/strategy.hpp"
 #include "lens_options.hpp"
 
@@ -26,6 +30,12 @@ struct ReplayOptions {
         ->check(CLI::NonNegativeNumber);
     cmd.add_flag("--json", json, "Print the summary as JSON");
     lens.add_to(cmd);
+  }
+  // Creates the output folder, before any work, so a bad --output fails at once.
+  void make_output_folder() const {
+    std::error_code ec;
+    std::filesystem::create_directories(out, ec);
+    if (ec || !std::filesystem::is_directory(out)) fail(out, "cannot create the output folder: " + ec.message());
   }
   StrategyOptions strategy_options() const {
     StrategyOptions options;

@@ -14,7 +14,9 @@ namespace cellwalk {
 
 class GeometryStore {
  public:
-  // budget_bytes 0 = unlimited. Throws Error if the world's directory alone exceeds it.
+  // budget_bytes 0 = unlimited; otherwise the directory, the cached meshes and the one level
+  // being read and decoded stay within it together. Throws Error if the budget cannot hold the
+  // directory plus the world's largest level.
   // policy nullptr = LRU.
   GeometryStore(const World& world, uint64_t budget_bytes,
                 std::unique_ptr<ReplacementPolicy> policy = nullptr);
@@ -28,17 +30,20 @@ class GeometryStore {
 
   // Bytes held now: everything reserved in the budget plus uncached meshes still held.
   uint64_t resident_bytes() const;
-  // The largest resident_bytes() seen at any get().
+  // The largest resident_bytes() seen at any get(), counting a load's encoded and decoded bytes
+  // while it is in flight.
   uint64_t peak_resident_bytes() const { return peak_; }
   const MemoryBudget& budget() const { return budget_; }
   BufferManager& buffer() { return *buffer_; }
   const World& world() const { return world_; }
 
-  static CacheKey key(ObjectId id, uint32_t level) { return (uint64_t(id) << 8) | level; }
+  static CacheKey key(ObjectId id, uint32_t level) { return (uint64_t(id) << 32) | level; }
+  static ObjectId object_of(CacheKey key) { return static_cast<ObjectId>(key >> 32); }
 
  private:
   const World& world_;
-  MemoryBudget budget_;
+  uint64_t load_headroom_ = 0;  // the largest encoded level plus its decoded size
+  MemoryBudget budget_;         // the caller's budget less load_headroom_
   uint64_t directory_bytes_ = 0;
   std::unique_ptr<BufferManager> buffer_;
   std::weak_ptr<const Mesh> transient_;  // the last uncached mesh handed out

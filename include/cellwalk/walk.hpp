@@ -50,7 +50,7 @@ struct CompareOptions {
 struct FidelitySummary {
   size_t frames = 0;
   double mean_differing_fraction = 0.0, max_differing_fraction = 0.0;
-  double mean_psnr_db = 0.0;  // over frames with differences; infinity if none differ
+  double mean_psnr_db = 0.0;  // PSNR of the mean squared error over all frames; infinity if none differ
   uint64_t visible_objects = 0, missed_objects = 0;
   double recall = 1.0;        // 1 - missed / visible over all compared frames
 };

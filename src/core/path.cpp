@@ -83,7 +83,9 @@ class Route {
  public:
   Route(const NavGraph& nav, Random& rng) : nav_(nav), rng_(rng), adjacent_(nav.nodes.size()) {
     for (auto [a, b] : nav.edges) {
-      if (a == b) continue;
+      // Edges of (almost) no length lead nowhere: leaving them out keeps every node with a
+      // neighbour a node the walk can leave.
+      if (glm::length(nav.nodes[a] - nav.nodes[b]) <= 1e-3f) continue;
       adjacent_[a].push_back(b);
       adjacent_[b].push_back(a);
     }
@@ -109,7 +111,7 @@ class Route {
     const uint32_t previous = nodes_.size() > 1 ? nodes_[nodes_.size() - 2] : UINT32_MAX;
     std::vector<uint32_t> choices;
     for (uint32_t n : adjacent_[here])
-      if (n != previous && glm::length(nav_.nodes[n] - nav_.nodes[here]) > 1e-3f) choices.push_back(n);
+      if (n != previous) choices.push_back(n);
     if (choices.empty()) choices.push_back(previous);  // dead end: turn back
     const uint32_t next = choices[static_cast<size_t>(rng_.integer(0, static_cast<int64_t>(choices.size()) - 1))];
     lengths_.push_back(lengths_.back() + glm::length(nav_.nodes[next] - nav_.nodes[here]));

@@ -81,20 +81,20 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
 FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
   FidelitySummary s;
   s.frames = frames.size();
-  double psnr_sum = 0.0;
-  size_t psnr_frames = 0;
+  // PSNR of the mean squared error over every compared frame: identical frames count as
+  // error 0 rather than being left out of an average of decibels.
+  constexpr double kPeak = 255.0 * 255.0;
+  double mse_sum = 0.0;
   for (const FidelityFrame& f : frames) {
     s.mean_differing_fraction += f.differing_fraction;
     s.max_differing_fraction = std::max(s.max_differing_fraction, f.differing_fraction);
     s.visible_objects += f.visible_objects;
     s.missed_objects += f.missed_objects;
-    if (std::isfinite(f.psnr_db)) {
-      psnr_sum += f.psnr_db;
-      ++psnr_frames;
-    }
+    if (std::isfinite(f.psnr_db)) mse_sum += kPeak / std::pow(10.0, f.psnr_db / 10.0);
   }
   if (!frames.empty()) s.mean_differing_fraction /= double(frames.size());
-  s.mean_psnr_db = psnr_frames ? psnr_sum / double(psnr_frames) : std::numeric_limits<double>::infinity();
+  const double mean_mse = frames.empty() ? 0.0 : mse_sum / double(frames.size());
+  s.mean_psnr_db = mean_mse > 0 ? 10.0 * std::log10(kPeak / mean_mse) : std::numeric_limits<double>::infinity();
   s.recall = s.visible_objects ? 1.0 - double(s.missed_objects) / double(s.visible_objects) : 1.0;
   return s;
 }

@@ -559,7 +559,7 @@ std::unordered_map<CacheKey, uint64_t> item_sizes(const World& world,
   Progress progress("item sizes", sizes.size());
   uint64_t done = 0;
   for (auto& [key, bytes] : sizes) {
-    const auto id = ObjectId(key >> 8);
+    const ObjectId id = GeometryStore::object_of(key);
     bytes = world.decode_level(id, 0, world.read_level(id, 0)).byte_size();
     progress.update(++done);
   }

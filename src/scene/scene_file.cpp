@@ -80,6 +80,9 @@ void SceneWriter::add(const Object& object) {
   ByteWriter& w = impl_->scratch;
   w.clear();
   encode_object(w, object);
+  if (w.size() > UINT32_MAX - kFrameBytes)
+    fail(impl_->file.path(), "object " + std::to_string(object.id) + " (" + object.name +
+                                 ") is larger than 4 GiB, the scene format's limit per object");
   SceneEntry e;
   e.offset = impl_->file.size();
   e.size = static_cast<uint32_t>(kFrameBytes + w.size());
@@ -172,8 +175,10 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
     const uint64_t footer_bytes = t.get<uint64_t>("footer size");
     if (std::memcmp(trailer_bytes.data() + 16, kEndMagic, 8) != 0)
       t.error("no end marker: the file is truncated or was not finished");
-    if (footer_offset < kHeaderBytes || footer_bytes < kFrameBytes ||
-        footer_offset + footer_bytes != file_size - kTrailerBytes)
+    // Written so no sum can wrap: every field is compared against what the file holds.
+    const uint64_t records_end = file_size - kTrailerBytes;
+    if (footer_offset < kHeaderBytes || footer_offset > records_end || footer_bytes < kFrameBytes ||
+        footer_bytes != records_end - footer_offset)
       t.error("footer position points outside the file");
     auto footer = pread_exact(fd_, path_, footer_offset, footer_bytes);
     auto payload = unframe(footer, path_, footer_offset, "footer");
@@ -191,7 +196,8 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
       e.triangles = r.get<uint32_t>("entry triangles");
       e.color = r.get<uint32_t>("entry colour");
       e.bounds = get_box(r);
-      if (e.offset < kHeaderBytes || e.size < kFrameBytes || e.offset + e.size > footer_offset)
+      if (e.offset < kHeaderBytes || e.size < kFrameBytes || e.offset > footer_offset ||
+          e.size > footer_offset - e.offset)
         r.error("object " + std::to_string(i) + " points outside the file's records");
       sum += e.triangles;
     }

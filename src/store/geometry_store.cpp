@@ -4,12 +4,40 @@
 #include "core/stopwatch.hpp"
 
 namespace cellwalk {
+namespace {
 
+// An upper bound of a decoded level's bytes: levels are stored compacted (every vertex used),
+// so at most 3 vertices per triangle, each with a position, a normal and a colour.
+uint64_t decoded_bound(uint64_t triangles) {
+  return sizeof(Mesh) + triangles * (3 * (sizeof(Vec3) * 2 + sizeof(Rgba8)) + 3 * sizeof(uint32_t));
+}
+
+// What one load holds outside the cache at most: the encoded level and its decoded mesh.
+uint64_t largest_load(const World& world) {
+  uint64_t largest = 0;
+  for (ObjectId id = 0; id < world.object_count(); ++id)
+    for (uint32_t level = 0; level < world.object(id).lod_count; ++level) {
+      const LodRecord& l = world.lod(id, level);
+      largest = std::max(largest, l.bytes + decoded_bound(l.triangles));
+    }
+  return largest;
+}
+
+}  // namespace
+
+// The cache's own limit leaves room for one load in flight, so what is cached plus what is
+// being read and decoded never passes the caller's budget.
 GeometryStore::GeometryStore(const World& world, uint64_t budget_bytes, std::unique_ptr<ReplacementPolicy> policy)
-    : world_(world), budget_(budget_bytes), directory_bytes_(world.resident_bytes()) {
-  if (!budget_.try_reserve(directory_bytes_))
-    fail(world.file().path(), "memory budget of " + std::to_string(budget_bytes) + " bytes is smaller than the world's directory (" +
-                                  std::to_string(directory_bytes_) + " bytes): give a larger --budget");
+    : world_(world),
+      load_headroom_(largest_load(world)),
+      budget_(budget_bytes == 0 ? 0 : budget_bytes > load_headroom_ ? budget_bytes - load_headroom_ : 1),
+      directory_bytes_(world.resident_bytes()) {
+  if (budget_bytes != 0 && budget_bytes < directory_bytes_ + load_headroom_)
+    fail(world.file().path(), "memory budget of " + std::to_string(budget_bytes >> 20) +
+                                  " MiB is too small: the world's directory and its largest level need " +
+                                  std::to_string((directory_bytes_ + load_headroom_ + (1 << 20) - 1) >> 20) +
+                                  " MiB; give a larger --budget");
+  if (!budget_.try_reserve(directory_bytes_)) fail(world.file().path(), "internal: directory does not fit the budget");
   buffer_ = std::make_unique<BufferManager>(budget_, policy ? std::move(policy) : make_lru_policy());
   peak_ = resident_bytes();
 }
@@ -27,7 +55,12 @@ std::shared_ptr<const Mesh> GeometryStore::get(ObjectId id, uint32_t level, cons
     stats.bytes_read += bytes.size();
     auto mesh = std::make_shared<const Mesh>(world_.decode_level(id, level, bytes));
     stats.decode_ms += watch.lap_ms();
-    return {mesh, sizeof(Mesh) + mesh->byte_size()};
+    const uint64_t mesh_bytes = sizeof(Mesh) + mesh->byte_size();
+    if (mesh_bytes > decoded_bound(mesh->triangle_count()))
+      fail(world_.file().path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
+           "decodes to unreferenced vertices (the file is damaged)");
+    peak_ = std::max(peak_, budget_.used() + bytes.size() + mesh_bytes);
+    return {mesh, mesh_bytes};
   };
   CacheResult r = buffer_->get(key(id, level), meta, loader);
   (r.hit ? stats.cache_hits : stats.cache_misses) += 1;

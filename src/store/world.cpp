@@ -30,7 +30,8 @@ World::World(const std::string& path, WorldFile::Options options) : file_(path, 
       l.triangles = r.get<uint32_t>("level triangles");
       l.error = r.get<float>("level error");
       r.get<uint32_t>("padding");
-      if (l.offset + l.bytes > geometry_bytes) r.error("level points outside the geometry section");
+      if (l.offset > geometry_bytes || l.bytes > geometry_bytes - l.offset)
+        r.error("level points outside the geometry section");
     }
   }
   {
@@ -44,7 +45,8 @@ World::World(const std::string& path, WorldFile::Options options) : file_(path, 
       o.color = r.get<uint32_t>("colour");
       o.lod_count = r.get<uint32_t>("level count");
       o.first_lod = r.get<uint64_t>("first level");
-      if (o.lod_count == 0 || o.first_lod + o.lod_count > lods_.size()) r.error("object's levels lie outside the level table");
+      if (o.lod_count == 0 || o.first_lod > lods_.size() || o.lod_count > lods_.size() - o.first_lod)
+        r.error("object's levels lie outside the level table");
     }
   }
 }

@@ -3,11 +3,14 @@
 // memory holds one batch of meshes plus the directory (40 + 24 × levels bytes per object).
 #include <algorithm>
 #include <atomic>
+#include <exception>
+#include <mutex>
 #include <filesystem>
 #include <thread>
 
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/error.hpp"
 #include "cellwalk/process_memory.hpp"
 #include "cellwalk/scene_file.hpp"
 #include "cellwalk/world.hpp"
@@ -32,22 +35,38 @@ EncodedObject encode_object(const Object& object, const BuildParams& params) {
   LodChain chain = build_lod_chain(object.mesh, params.lod);
   for (const LodLevel& level : chain.levels) {
     out.blobs.push_back(encode_mesh(level.mesh, params.codec));
+    if (out.blobs.back().size() > UINT32_MAX)
+      fail("object " + object.name, "one level encodes to more than 4 GiB, the world format's limit per level");
     out.levels.push_back({0, static_cast<uint32_t>(out.blobs.back().size()),
                           static_cast<uint32_t>(level.triangle_count), level.error});
   }
   return out;
 }
 
-// Runs fn(i) for i in [0, n) on `threads` threads.
+// Runs fn(i) for i in [0, n) on `threads` threads. The first exception any call throws stops
+// the others from starting new work and is rethrown here once every thread has joined.
 template <typename Fn>
 void parallel_for(size_t n, int threads, Fn fn) {
   std::atomic<size_t> next{0};
+  std::mutex mutex;
+  std::exception_ptr failure;
   auto work = [&] {
-    for (size_t i; (i = next.fetch_add(1)) < n;) fn(i);
+    for (size_t i; (i = next.fetch_add(1)) < n;) {
+      try {
+        fn(i);
+      } catch (...) {
+        std::lock_guard lock(mutex);
+        if (!failure) failure = std::current_exception();
+        next = n;
+      }
+    }
   };
-  std::vector<std::jthread> pool;
-  for (int t = 1; t < threads; ++t) pool.emplace_back(work);
-  work();
+  {
+    std::vector<std::jthread> pool;
+    for (int t = 1; t < threads; ++t) pool.emplace_back(work);
+    work();
+  }
+  if (failure) std::rethrow_exception(failure);
 }
 
 std::string params_json(const BuildParams& p, const std::string& scene_file) {

@@ -50,7 +50,7 @@ WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
   if (XXH3_64bits(table.data(), h.checksum_bytes) != h.checksum_hash)
     fail(path + "@" + std::to_string(h.checksum_first_page * page_size_), "page checksum table: checksum mismatch (the file is damaged)");
   page_checksums_.resize(h.checksummed_pages);
-  std::memcpy(page_checksums_.data(), table.data(), h.checksum_bytes);
+  if (h.checksum_bytes) std::memcpy(page_checksums_.data(), table.data(), h.checksum_bytes);
 
   const uint64_t section_offset = h.section_first_page * page_size_;
   auto section_pages = read_pages(*pages_, h.section_first_page, (h.section_bytes + page_size_ - 1) / page_size_);
@@ -63,7 +63,8 @@ WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
     s.name.assign(name.data(), strnlen(name.data(), name.size()));
     s.first_page = r.get<uint64_t>("section first page");
     s.bytes = r.get<uint64_t>("section bytes");
-    if (s.first_page < 1 || s.first_page + s.page_count(page_size_) > h.checksum_first_page)
+    if (s.first_page < 1 || s.first_page >= h.checksum_first_page ||
+        s.bytes > (h.checksum_first_page - s.first_page) * page_size_)
       fail(path + "@" + std::to_string(section_offset), "section " + s.name + " lies outside the data pages");
     sections_.push_back(s);
   }

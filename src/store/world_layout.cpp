@@ -56,11 +56,13 @@ Header decode_header(std::span<const uint8_t> bytes, const std::string& path, ui
     fail(path + "@0", "header: checksum mismatch (the file is damaged)");
   if (h.page_size < 512 || (h.page_size & (h.page_size - 1)) != 0)
     fail(path + "@12", "header: page size " + std::to_string(h.page_size) + " is invalid");
-  if (h.page_count * h.page_size != file_size)
+  // Page counts are checked against the file before any product, so none can wrap.
+  if (file_size % h.page_size != 0 || h.page_count != file_size / h.page_size)
     fail(path, "file has " + std::to_string(file_size) + " bytes but its header says " +
                    std::to_string(h.page_count) + " pages of " + std::to_string(h.page_size) +
                    " (truncated or extended)");
-  if (h.checksummed_pages + 1 != h.checksum_first_page || h.checksum_bytes != 4 * h.checksummed_pages ||
+  if (h.checksummed_pages >= h.page_count || h.checksummed_pages + 1 != h.checksum_first_page ||
+      h.checksum_bytes != 4 * h.checksummed_pages ||
       h.section_first_page * h.page_size < h.checksum_first_page * h.page_size + h.checksum_bytes ||
       h.section_first_page >= h.page_count || h.section_bytes != h.section_count * kSectionEntryBytes ||
       h.section_first_page * h.page_size + h.section_bytes > file_size)
