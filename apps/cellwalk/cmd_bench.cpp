@@ -77,6 +77,10 @@ void register_bench(CLI::App& root) {
       root.add_subcommand("bench", "Measure a component and write its report under docs/results/");
   bench->require_subcommand(1);
   register_store(*bench);
+  register_bench_hdov_tree(*bench, command_line);
+  register_bench_review(*bench, command_line);
+  register_bench_visual(*bench, command_line);
+  register_bench_visibility(*bench, command_line);
 }
 
 }  // namespace cellwalk::app

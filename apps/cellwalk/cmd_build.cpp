@@ -4,6 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/rtree.hpp"
 #include "cellwalk/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
@@ -15,6 +16,8 @@ void register_build(CLI::App& root) {
   struct Args {
     std::string scene, out;
     BuildParams params;
+    RTreeParams rtree;
+    bool str = false;
     bool json = false;
   };
   auto args = std::make_shared<Args>();
@@ -26,13 +29,20 @@ void register_build(CLI::App& root) {
   cmd->add_option("--position-bits", args->params.codec.position_bits, "Quantisation of positions, bits per axis")->capture_default_str()->check(CLI::Range(1, 16));
   cmd->add_flag("--zstd", args->params.codec.zstd, "Compress encoded geometry with zstd as well");
   cmd->add_option("--threads", args->params.threads, "Worker threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--rtree-fanout", args->rtree.max_entries, "R-tree node fan-out M (0 = as many as fit a page)")->capture_default_str();
+  cmd->add_flag("--rtree-str", args->str, "Pack the R-tree with Sort-Tile-Recursive instead of inserting (Ang-Tan split)");
   cmd->add_flag("--json", args->json, "Print the report as JSON");
   cmd->callback([args] {
+    if (args->str) args->rtree.method = RTreeMethod::kStr;
+    build_rtree({}, args->rtree, args->params.page_size);  // bad R-tree parameters fail before the build
     std::unique_ptr<Progress> progress;
     BuildReport r = build_world(args->scene, args->out, args->params,
                                 [&](uint64_t done, uint64_t total) {
                                   if (!progress) progress = std::make_unique<Progress>("build", total);
                                   progress->update(done);
+                                },
+                                [&](WorldWriter& writer, std::span<const Aabb> bounds) {
+                                  write_rtree_section(build_rtree(bounds, args->rtree, writer.page_size()), writer);
                                 });
     progress.reset();
     if (args->json) {

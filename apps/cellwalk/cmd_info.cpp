@@ -3,6 +3,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/rtree.hpp"
 #include "cellwalk/scene_file.hpp"
 #include "cellwalk/world.hpp"
 #include "commands.hpp"
@@ -44,6 +45,12 @@ nlohmann::ordered_json world_json(const std::string& file) {
       per_level[l] += world.lod(id, l).triangles;
     }
   }
+  nlohmann::ordered_json rtree = nullptr;
+  if (world.file().has_section(kRTreeSection)) {
+    const DiskRTree tree(world);
+    rtree = {{"height", tree.height()}, {"nodes", tree.node_count()}, {"max_entries", tree.max_entries()},
+             {"min_entries", tree.min_entries()}, {"method", tree.method() == RTreeMethod::kStr ? "str" : "linear-insert"}};
+  }
   return {{"file", file},
           {"kind", "world"},
           {"page_size", world.file().page_size()},
@@ -59,6 +66,7 @@ nlohmann::ordered_json world_json(const std::string& file) {
                       {info.bounds.max.x, info.bounds.max.y, info.bounds.max.z}}},
           {"nav_nodes", info.nav.nodes.size()},
           {"nav_edges", info.nav.edges.size()},
+          {"rtree", rtree},
           {"sections", sections},
           {"build_params", nlohmann::ordered_json::parse(world.build_params_json(), nullptr, false)}};
 }

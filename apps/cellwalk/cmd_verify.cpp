@@ -2,6 +2,7 @@
 #include <cstdio>
 #include <memory>
 
+#include "cellwalk/rtree.hpp"
 #include "cellwalk/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
@@ -20,6 +21,9 @@ void register_verify(CLI::App& root) {
       progress->update(done);
     });
     progress.reset();
+    if (world.file().has_section(kRTreeSection))
+      std::printf("verify: R-tree of %llu nodes checked: boxes, levels, every object once\n",
+                  (unsigned long long)DiskRTree(world).check());
     std::printf("verify: %s is intact: header, tables and %llu data pages of %u bytes checked (%llu pages in all), "
                 "%zu sections, %zu objects\n",
                 file->c_str(), (unsigned long long)(pages - 1), world.file().page_size(),

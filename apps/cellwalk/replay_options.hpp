@@ -16,6 +16,9 @@ namespace cellwalk::app {
 struct ReplayOptions {
   std::string world, path, strategy = "brute", out;
   double budget_mib = 0;
+  double eta = 0.001;
+  uint64_t polygon_budget = 20000;
+  bool no_dov_levels = false;
   bool json = false;
   LensOptions lens;
 
@@ -28,6 +31,9 @@ struct ReplayOptions {
     cmd.add_option("--budget", budget_mib, "Memory budget for the strategy, MiB (0 = none); never exceeded")
         ->capture_default_str()
         ->check(CLI::NonNegativeNumber);
+    cmd.add_option("--eta", eta, "hdov-vsc: DoV threshold η (HDoV thesis §5.3)")->capture_default_str()->check(CLI::NonNegativeNumber);
+    cmd.add_option("--polygon-budget", polygon_budget, "hdov-pb: triangles per frame (HDoV thesis §6.1.2)")->capture_default_str()->check(CLI::PositiveNumber);
+    cmd.add_flag("--no-dov-levels", no_dov_levels, "hdov-vsc, hdov-pb: no level lowered by DoV (eq. 5.6, PB's λ)");
     cmd.add_flag("--json", json, "Print the summary as JSON");
     lens.add_to(cmd);
   }
@@ -40,6 +46,9 @@ struct ReplayOptions {
   StrategyOptions strategy_options() const {
     StrategyOptions options;
     options.memory_budget_bytes = static_cast<uint64_t>(budget_mib * 1024 * 1024);
+    options.eta = eta;
+    options.polygon_budget = polygon_budget;
+    options.dov_levels = !no_dov_levels;
     return options;
   }
 };

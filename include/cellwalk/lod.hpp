@@ -68,4 +68,42 @@ LodChain build_lod_chain(const Mesh& mesh, const LodParams& params = {});
 // screen_error.hpp: pixels_per_unit() for a viewpoint, cell_pixels_per_unit() for a cell.
 size_t select_level(const LodChain& chain, float pixels_per_unit, float pixel_bound);
 
+// ---- Internal LODs of tree nodes (HDoV thesis §5.6, digest §3.10) ----------------------------
+
+// How an aggregate is simplified into internal LODs.
+enum class AggregateSimplifier {
+  // meshopt_simplifySloppy (vertex clustering) step by step: fast, for wide nodes (the disk
+  // HDoV-tree's M = 16) whose aggregates are large.
+  kClustering,
+  // build_lod_chain (QEM edge collapse, clustering on a stall), levels below its level 0: for
+  // binary nodes (the k-d scene tree), whose aggregates near the root are so small (tens of
+  // triangles) that clustering collapses them to nothing and the node would get no LOD.
+  kLodChain,
+};
+
+// How a tree node's internal LODs are made from its parts (its children's coarsest levels).
+struct AggregateLodParams {
+  float ratio = 0.5f;          // each level aims at this fraction of the previous one's triangles
+  uint32_t levels = 3;         // at most this many levels are kept
+  size_t min_triangles = 8;    // no level is made once the last one has at most this many
+  AggregateSimplifier simplifier = AggregateSimplifier::kClustering;
+};
+
+// The internal LODs of one node: the parts appended into one aggregate (each part's colour
+// written per vertex when it has none, so the aggregate keeps the objects' colours), then
+// simplified step by step by params.simplifier. The aggregate itself is
+// not kept: levels[0], the finest, has strictly fewer triangles than Σ parts, as §5.6
+// requires of a parent's finest LOD against its children's coarsest; each next level has
+// strictly fewer than the one before. Empty when not even one step makes progress.
+// Used by both trees (the disk HDoV-tree and the k-d scene tree). REQUIRES 0 < ratio < 1.
+struct LodPart {
+  const Mesh* mesh = nullptr;
+  Rgba8 color = 0;
+};
+std::vector<Mesh> build_aggregate_lods(const std::vector<LodPart>& parts, const AggregateLodParams& params = {});
+
+// The parts appended into one mesh exactly as build_aggregate_lods aggregates them: what a node
+// without internal LODs (build_aggregate_lods gave none) hands its parent as its coarsest.
+Mesh aggregate_lod_parts(const std::vector<LodPart>& parts);
+
 }  // namespace cellwalk

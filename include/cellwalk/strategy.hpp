@@ -20,7 +20,8 @@ class Strategy {
   virtual std::string name() const = 0;
 
   // Replaces `items` with what to draw from `camera`. Adds query time (and any I/O it does)
-  // to `stats`.
+  // to `stats`. On entry stats.time is the frame's path time when the caller has one (walk,
+  // compare), else 0.
   virtual void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) = 0;
 
   // The geometry of an item the renderer does not hold. The pointer stays valid until the
@@ -37,6 +38,15 @@ class Strategy {
 
 struct StrategyOptions {
   uint64_t memory_budget_bytes = 0;  // 0 = unbounded; never exceeded
+  // HDoV thesis η: the DoV threshold of the threshold searches (hdov-vsc; docs/hdov-tree.md).
+  double eta = 0.001;
+  // hdov-pb: the polygon budget, triangles per frame (HDoV thesis §6.1.2).
+  uint64_t polygon_budget = 20000;
+  // hdov-vsc, hdov-pb: lower objects' levels by their DoV (eq. 5.6, PB's λ). false: VSC draws
+  // visible objects at level 0 and PB's levels follow its budget shares alone.
+  bool dov_levels = true;
+  // hdov-vsc, hdov-pb, conv: the k-d scene tree file ("" = WORLD.kdtree, built on first use).
+  std::string kd_tree_file;
 };
 
 // Names accepted by make_strategy, for --help and errors.

@@ -16,8 +16,9 @@ namespace cellwalk {
 // Called after each frame with (frames done, frames total).
 using ProgressFn = std::function<void(size_t, size_t)>;
 
-// Renders one frame of `strategy` from `camera` and returns its statistics.
-FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera);
+// Renders one frame of `strategy` from `camera` and returns its statistics. `time` (the path
+// time, seconds) is in stats.time when select() runs, so a strategy can measure velocity.
+FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time = 0.0);
 
 // Replays every frame of `path`. The camera's lens (fov, aspect, near, far) comes from `lens`.
 std::vector<FrameStats> walk(const CameraPath& path, const Camera& lens, Strategy& strategy,

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -37,11 +38,16 @@ struct BuildReport {
   uint64_t peak_rss_bytes = 0;    // of the process, from /proc/self/status VmHWM
 };
 
+// Sections a layer above the store adds to a world as it is built (e.g. the R-tree of
+// src/index), given the objects' boxes in id order; called after the directory is written.
+using ExtraSections = std::function<void(WorldWriter& writer, std::span<const Aabb> object_bounds)>;
+
 // Streams `scene_file` into a new world file at `world_file`, objects in parallel, a bounded
 // number at a time. Called with (objects done, objects total).
 BuildReport build_world(const std::string& scene_file, const std::string& world_file,
                         const BuildParams& params,
-                        const std::function<void(uint64_t, uint64_t)>& progress = {});
+                        const std::function<void(uint64_t, uint64_t)>& progress = {},
+                        const ExtraSections& extra_sections = {});
 
 // One object's entry in the directory.
 struct ObjectRecord {

@@ -59,7 +59,7 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
     render_frame(truth, renderer, camera);
     Image truth_color = renderer.read_color();
     IdImage truth_ids = renderer.read_ids();
-    render_frame(strategy, renderer, camera);
+    render_frame(strategy, renderer, camera, path.frames[i].time);
     Image test_color = renderer.read_color();
     IdImage test_ids = renderer.read_ids();
     Image diff;

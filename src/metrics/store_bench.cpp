@@ -13,13 +13,11 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
-#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
 #include <numbers>
-#include <thread>
 #include <unordered_map>
 
 #include "cellwalk/atomic_file.hpp"
@@ -37,13 +35,18 @@
 #include "cellwalk/scene_file.hpp"
 #include "cellwalk/world.hpp"
 #include "core/progress.hpp"
+#include "metrics/bench_support.hpp"
 #include "metrics/svg_plot.hpp"
 
 namespace cellwalk {
 namespace {
 
 using Json = nlohmann::ordered_json;
-using Clock = std::chrono::steady_clock;
+using bench::Clock;
+using bench::fixed;
+using bench::machine_info;
+using bench::seconds_since;
+using bench::utc_now;
 namespace fs = std::filesystem;
 
 constexpr size_t kRandomReadBytes = 4096;
@@ -54,10 +57,6 @@ constexpr float kQueryCellHalfSide = 10.0f;
 
 // Where measured loops leave a result the compiler must compute (cf. benchmark::DoNotOptimize).
 volatile uint64_t g_sink = 0;
-
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 template <typename Fn>
 double timed(Fn&& fn) {
@@ -73,59 +72,8 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : (v[n / 2 - 1] + v[n / 2]) / 2;
 }
 
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
 std::string mib(uint64_t bytes) {
   return fixed(double(bytes) / (1 << 20), 1) + " MiB";
-}
-
-// ---- The machine and the run, for the report's header -----------------------------------------
-
-std::string cpu_model() {
-  std::ifstream in("/proc/cpuinfo");
-  for (std::string line; std::getline(in, line);) {
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  }
-  return "unknown";
-}
-
-uint64_t memory_total_bytes() {
-  std::ifstream in("/proc/meminfo");
-  std::string key;
-  uint64_t kib = 0;
-  while (in >> key >> kib) {
-    if (key == "MemTotal:") return kib * 1024;
-    in.ignore(std::numeric_limits<std::streamsize>::max(), '\n');
-  }
-  return 0;
-}
-
-std::string utc_now() {
-  const std::time_t now = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&now, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M UTC", &tm);
-  return buf;
-}
-
-// The 1-minute load average: on a shared machine it says how much else competed for the cores.
-double load_average() {
-  std::ifstream in("/proc/loadavg");
-  double load = 0.0;
-  in >> load;
-  return load;
-}
-
-Json machine_info() {
-  return {{"nproc", std::thread::hardware_concurrency()},
-          {"cpu", cpu_model()},
-          {"memory_bytes", memory_total_bytes()},
-          {"load_average", load_average()}};
 }
 
 // ---- The measured world ------------------------------------------------------------------------
@@ -942,26 +890,6 @@ void write_report(const fs::path& out, const Json& summary, const Json& io_rows,
   write_file_atomically((out / "store.md").string(), build_markdown(summary));
 }
 
-// The scene and world files: the caller's directory, or a temporary one removed afterwards.
-class WorkDir {
- public:
-  explicit WorkDir(const std::string& dir) : owned_(dir.empty()) {
-    path_ = owned_
-                ? fs::temp_directory_path() / ("cellwalk-bench-store-" + std::to_string(::getpid()))
-                : fs::path(dir);
-    fs::create_directories(path_);
-  }
-  ~WorkDir() {
-    std::error_code ignored;
-    if (owned_) fs::remove_all(path_, ignored);
-  }
-  const fs::path& path() const { return path_; }
-
- private:
-  bool owned_;
-  fs::path path_;
-};
-
 Json params_json(const StoreBenchParams& p) {
   return {{"objects", p.objects},
           {"large", p.large},
@@ -981,7 +909,7 @@ nlohmann::ordered_json run_store_bench(const StoreBenchParams& params) {
                   {"machine", machine_info()},
                   {"command", params.command_line},
                   {"params", params_json(params)}};
-  const WorkDir work(params.work_dir);
+  const bench::WorkDir work(params.work_dir, "store");
   const std::string scene = (work.path() / "city.cwscene").string();
   const std::string world_file = (work.path() / "city.cww").string();
   generate_city_scene(params.objects, scene);

@@ -5,8 +5,9 @@
 
 namespace cellwalk {
 
-FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera) {
+FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time) {
   FrameStats stats;
+  stats.time = time;
   Stopwatch frame_watch;
   std::vector<DrawItem> items;
   strategy.select(camera, items, stats);
@@ -39,9 +40,8 @@ std::vector<FrameStats> walk(const CameraPath& path, const Camera& lens, Strateg
   Camera camera = lens;
   for (size_t i = 0; i < path.frames.size(); ++i) {
     apply(path.frames[i], camera);
-    FrameStats stats = render_frame(strategy, renderer, camera);
+    FrameStats stats = render_frame(strategy, renderer, camera, path.frames[i].time);
     stats.frame = static_cast<int>(i);
-    stats.time = path.frames[i].time;
     frames.push_back(stats);
     if (progress) progress(i + 1, path.frames.size());
   }

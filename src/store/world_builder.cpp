@@ -86,7 +86,8 @@ std::span<const uint8_t> as_bytes(const std::string& s) {
 }  // namespace
 
 BuildReport build_world(const std::string& scene_file, const std::string& world_file,
-                        const BuildParams& params, const std::function<void(uint64_t, uint64_t)>& progress) {
+                        const BuildParams& params, const std::function<void(uint64_t, uint64_t)>& progress,
+                        const ExtraSections& extra_sections) {
   Stopwatch watch;
   SceneReader scene(scene_file);
   WorldWriter writer(world_file, params.page_size);
@@ -156,6 +157,12 @@ BuildReport build_world(const std::string& scene_file, const std::string& world_
   writer.begin_section(world_sections::kParams);
   writer.write(as_bytes(params_json(params, scene_file)));
   writer.end_section();
+  if (extra_sections) {
+    std::vector<Aabb> bounds;
+    bounds.reserve(objects.size());
+    for (const ObjectRecord& o : objects) bounds.push_back(o.bounds);
+    extra_sections(writer, bounds);
+  }
   writer.finish();
 
   report.objects = objects.size();

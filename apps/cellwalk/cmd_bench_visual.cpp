@@ -1,0 +1,49 @@
+// cellwalk bench visual: HDoV thesis §5.8 reproduced (src/metrics/visual_bench.hpp).
+#include <cstdio>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "commands.hpp"
+#include "metrics/visual_bench.hpp"
+
+namespace cellwalk::app {
+
+void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
+  auto* cmd = bench.add_subcommand("visual", "VISUAL (HDoV thesis ch. 5): Table 5.2, Exps. 1-3 -> <out>/visual.md");
+  struct Args {
+    VisualBenchParams params;
+    bool json = false;
+  };
+  auto args = std::make_shared<Args>();
+  VisualBenchParams& p = args->params;
+  cmd->add_option("--objects", p.objects, "Objects of the city")->capture_default_str()->check(CLI::Range(uint64_t(50), uint64_t(1000000)));
+  cmd->add_option("--cells", p.cells_per_side, "View cells per side of the grid")->capture_default_str()->check(CLI::Range(2, 256));
+  cmd->add_option("--dov-resolution", p.dov_resolution, "DoV cube-map face resolution (thesis: 256)")->capture_default_str()->check(CLI::Range(4, 1024));
+  cmd->add_option("--fanout", p.fanout, "HDoV-tree fan-out M")->capture_default_str()->check(CLI::Range(4, 140));
+  cmd->add_option("--queries", p.queries, "Queries per Exp. 1/2 run")->capture_default_str()->check(CLI::Range(1, 1000000));
+  cmd->add_option("--frames", p.frames, "Frames of the Exp. 3 session")->capture_default_str()->check(CLI::Range(2, 100000));
+  cmd->add_option("--render-rate", p.render_mtri_per_s, "Modelled rendering rate, M triangles/s")->capture_default_str()->check(CLI::PositiveNumber);
+  cmd->add_option("--cache-pages", p.cache_pages, "Node cache sizes of Exp. 1, pages")->capture_default_str();
+  cmd->add_option("--etas", p.etas, "η values of Exp. 2")->capture_default_str();
+  cmd->add_option("--walk-etas", p.walk_etas, "η values of Exp. 3")->capture_default_str();
+  cmd->add_option("--seed", p.seed, "City, query and path seed")->capture_default_str();
+  cmd->add_option("--threads", p.threads, "Worker threads for DoV (0 = all cores)")->capture_default_str();
+  cmd->add_option("--out", p.out_dir, "Directory of the report (visual.md and visual/)")->capture_default_str();
+  cmd->add_option("--work-dir", p.work_dir, "Where the world goes (default: a temporary directory)");
+  cmd->add_flag("--json", args->json, "Print the summary as JSON");
+  cmd->callback([args, command_line] {
+    args->params.command_line = command_line();
+    const nlohmann::ordered_json summary = run_visual_bench(args->params);
+    if (args->json) {
+      std::printf("%s\n", summary.dump(2).c_str());
+      return;
+    }
+    for (const auto& [label, w] : summary["walk"].items())
+      std::printf("%-18s mean %7.2f ms  variance %8.2f  peak %6.2f MiB\n", label.c_str(), w["mean_ms"].get<double>(),
+                  w["variance"].get<double>(), w["peak_bytes"].get<double>() / 1048576.0);
+    std::printf("wrote %s/visual.md in %.0f s\n", args->params.out_dir.c_str(), summary["seconds"].get<double>());
+  });
+}
+
+}  // namespace cellwalk::app

@@ -1,0 +1,36 @@
+// `cellwalk bench visual`: the experiments of HDoV thesis §5.8 (digest §5.5) on a generated
+// city, side by side in one run: Table 5.2 (storage of the three V-page schemes), Exp. 1 (node
+// cache hit rate vs cache size for LRU, DoV and DoV-Time, continuous and random queries),
+// Exp. 2 (search time and light-weight page I/O vs η for the schemes and the naive method),
+// Exp. 3 (walkthrough frame time mean and variance vs η against REVIEW, peak memory).
+// Writes <out>/visual.md and <out>/visual/*.csv, *.svg.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+namespace cellwalk {
+
+struct VisualBenchParams {
+  uint64_t objects = 1500;            // buildings of the city
+  int cells_per_side = 8;             // view-cell grid over the city (cells_per_side²)
+  int dov_resolution = 32;            // cube-map face resolution of the DoV engine (thesis: 256)
+  uint32_t fanout = 8;                // M
+  int queries = 400;                  // per Exp. 1 / Exp. 2 configuration
+  int frames = 600;                   // Exp. 3 path
+  double render_mtri_per_s = 4.0;     // modelled rendering rate (llvmpipe, docs/renderer.md)
+  std::vector<double> cache_pages = {2, 4, 8, 16, 32, 64, 128};
+  std::vector<double> etas = {0, 0.0005, 0.001, 0.002, 0.004, 0.008};
+  std::vector<double> walk_etas = {0, 0.0003, 0.001, 0.004};
+  uint64_t seed = 1;
+  int threads = 0;
+  std::string out_dir = "docs/results";
+  std::string work_dir;               // empty = a temporary directory, removed at the end
+  std::string command_line;
+};
+
+nlohmann::ordered_json run_visual_bench(const VisualBenchParams& params);
+
+}  // namespace cellwalk
