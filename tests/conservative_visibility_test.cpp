@@ -106,6 +106,23 @@ TEST(Occluders, BoxesLieInsideTheSolid) {
   }
 }
 
+// A building as generators and modellers make it: a body with floor slabs through it and
+// window boxes half sunk into its walls. The slabs' faces cut the whole mesh's interior into
+// storeys, but the body is a closed part of its own and gives itself as the occluder.
+TEST(Occluders, AssemblyPartsGiveTheirOwnBoxes) {
+  const Aabb body = box({0, 0, 0}, {10, 30, 12});
+  Mesh m = box_mesh(body);
+  for (float y = 3; y < 30; y += 3) append(m, box_mesh(box({-0.2f, y, -0.2f}, {10.2f, y + 0.3f, 12.2f})));
+  for (float y = 1; y < 29; y += 3)
+    for (float x = 1; x < 9; x += 2) append(m, box_mesh(box({x, y, -0.1f}, {x + 1, y + 1.5f, 0.1f})));
+  const auto found = visibility::inscribed_boxes(m);
+  ASSERT_TRUE(found.closed);
+  ASSERT_FALSE(found.boxes.empty());
+  EXPECT_EQ(found.boxes[0].min, body.min);
+  EXPECT_EQ(found.boxes[0].max, body.max);
+  for (const Aabb& b : found.boxes) EXPECT_TRUE(contains(body, b) || b.size().y < 0.5f);
+}
+
 TEST(Occluders, BridgesSpanAbuttingBoxes) {
   const Aabb a = box({5, 0, -10}, {8, 10, 0}), b = box({5, 0, 0}, {8, 10, 10});
   const auto bridges = visibility::bridge_boxes(a, b);
@@ -440,8 +457,50 @@ TEST(ConservativeEngine, StaggeredWallsHideOnlyWithFusion) {
   EXPECT_EQ(oracle.visible(kCell, rng, 60, 40).count(2), 0u);
 }
 
-// A random world of boxes (on the ground and floating, overlapping at times) and a few
-// simplified bunnies.
+// A wall standing on the ground and a low box right behind it: from the cell (1 m tall) the
+// wall shrunk by the cell's height opens a gap at its foot that the box's foot shows through;
+// standing on the floor, nothing passes under the wall, so the grounded wall hides the box.
+TEST(ConservativeEngine, GroundedOccluderHidesWhatIsAtItsFoot) {
+  const Aabb wall = box({5, 0, -10}, {6, 4, 10}), low = box({7, 0, -1}, {8, 0.5f, 1});
+  Scene scene(boxes({wall, low}));
+  ConservativeParams grounded = only_shrinking(), floating = only_shrinking();
+  grounded.refine_levels = floating.refine_levels = 0;
+  floating.grounded_occluders = false;
+  EXPECT_FALSE(scene.sees(kCell, 1, grounded));
+  EXPECT_TRUE(scene.sees(kCell, 1, floating));
+  RayOracle oracle(*scene.world);
+  Random rng(12);
+  EXPECT_EQ(oracle.visible(kCell, rng, 60, 40).count(1), 0u);
+}
+
+// A pillar narrower than the cell: shrunk by the whole cell it vanishes, but each quarter of
+// the cell keeps most of it, and the box close behind it is in every quarter's shadow.
+TEST(ConservativeEngine, RefiningTheCellHidesBehindSmallOccluders) {
+  const Aabb cell = box({-2, 1, -2}, {2, 3, 2});
+  const Aabb pillar = box({3, 0, -1.5f}, {3.5f, 10, 1.5f}), target = box({4, 1, -0.2f}, {4.2f, 2, 0.2f});
+  Scene scene(boxes({pillar, target}));
+  ConservativeParams coarse = only_shrinking(), refined = only_shrinking();
+  coarse.refine_levels = 0;
+  refined.refine_levels = 3;
+  EXPECT_TRUE(scene.sees(cell, 1, coarse));
+  EXPECT_FALSE(scene.sees(cell, 1, refined));
+  RayOracle oracle(*scene.world);
+  Random rng(13);
+  EXPECT_EQ(oracle.visible(cell, rng, 80, 40).count(1), 0u);
+}
+
+// A building of parts: a body, floor slabs through it, window boxes half sunk into a wall.
+Mesh building(const Vec3& at, const Vec3& size) {
+  Mesh m = box_mesh(box(at, at + size));
+  for (float y = 3; y < size.y; y += 3)
+    append(m, box_mesh(box({at.x - 0.2f, at.y + y, at.z - 0.2f}, {at.x + size.x + 0.2f, at.y + y + 0.3f, at.z + size.z + 0.2f})));
+  for (float y = 1; y + 1.5f < size.y; y += 3)
+    append(m, box_mesh(box({at.x + 0.5f, at.y + y, at.z - 0.1f}, {at.x + 1.5f, at.y + y + 1.5f, at.z + 0.1f})));
+  return m;
+}
+
+// A random world of boxes (on the ground and floating, overlapping at times), buildings of
+// parts and a few simplified bunnies.
 std::vector<Object> random_world(uint64_t seed, const Mesh& bunny) {
   Random rng(seed);
   std::vector<Object> out;
@@ -452,6 +511,11 @@ std::vector<Object> random_world(uint64_t seed, const Mesh& bunny) {
     out.push_back(object_of(ObjectId(out.size()),
                             box_mesh(box({c.x - half.x, base, c.z - half.z},
                                          {c.x + half.x, base + 2 * half.y, c.z + half.z}))));
+  }
+  for (int i = 0; i < 4; ++i) {
+    const Vec3 at(rng.uniform(-28, 24), 0, rng.uniform(-28, 24));
+    out.push_back(object_of(ObjectId(out.size()),
+                            building(at, Vec3(rng.uniform(2, 6), rng.uniform(4, 14), rng.uniform(2, 6)))));
   }
   for (int i = 0; i < 3; ++i) {
     Mesh m = bunny;

@@ -38,6 +38,7 @@ visibility::PvsRun make_run(const Args& a, const VisibilityEngine& engine) {
   const EngineOptions& o = a.options;
   run.settings = a.cells + " points=" + std::to_string(o.sample_points) + " rays=" + std::to_string(o.rays_per_point) + " aimed=" + std::to_string(o.aimed_rays_per_object) +
                  " seed=" + std::to_string(o.seed) + " dov=" + std::to_string(o.dov_resolution) +
+                 (run.conservative ? " refine=" + std::to_string(o.refine_levels) : "") +
                  (o.dov_midpoint_weights ? " midpoint" : "");
   run.threads = a.threads;
   if (!a.shard.empty() && std::sscanf(a.shard.c_str(), "%d/%d", &run.shard, &run.shards) != 2)
@@ -217,6 +218,7 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--points", a->options.sample_points, "Sampling: random points per cell")->capture_default_str();
   cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str();
   cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str();
+  cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str();
   cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str();
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
   cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str();

@@ -28,6 +28,15 @@ struct ConservativeParams {
   // HDoV §5.5.1: one unshrunk occluder hides the object from all 8 cell corners (no fusion,
   // but thin and small occluders count).
   bool corner_test = true;
+  // Occluders standing on the floor (the lowest point of any object) reach down without end:
+  // nothing lies below the floor, so no segment from a viewpoint above it passes underneath.
+  // Keeps shrinking by the cell's height from opening a gap at the ground.
+  bool grounded_occluders = true;
+  // The cell is refined this many times (split in half along every axis at least half as
+  // long as its longest: x and z for a flat eye-height cell); an object is dropped only if
+  // every leaf it reaches hides it. Shrinking loses the size of the region at every occluder
+  // edge, so smaller regions hide much more; the union keeps the guarantee.
+  int refine_levels = 3;
   // Only occluders within this distance of the cell take part in the corner test (metres).
   double corner_test_radius = 200.0;
   // Threads deriving the occluders when the engine is made; 0 = all cores.

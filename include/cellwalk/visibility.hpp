@@ -47,6 +47,9 @@ struct EngineOptions {
   // DoV: eq. 5.11 at pixel centres as the thesis writes it (its weights sum to 1 - O(1/R²)),
   // instead of the default, eq. 5.11 integrated over each pixel (weights sum to exactly 1).
   bool dov_midpoint_weights = false;
+  // Conservative: how many times each cell is refined (halved along its long axes) for
+  // occluder shrinking; more levels hide more and cost more (docs/conservative-visibility.md).
+  int refine_levels = 3;
 };
 
 // Names accepted by make_engine(), e.g. {"sampling", "dov"}.

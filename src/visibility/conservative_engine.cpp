@@ -11,6 +11,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <limits>
 #include <mutex>
 #include <thread>
 
@@ -22,13 +23,50 @@ namespace {
 
 using visibility::CubeDepthBuffer;
 
+// How far a grounded occluder reaches below the floor (any depth beyond the world works).
+constexpr float kBelowFloor = 1.0e5f;
+
 // A box inside the solid of `object`, or inside the union of the solids of `object` and
-// `other` (a bridge between two boxes that touch).
+// `other` (a bridge between two boxes that touch). `grounded` is the box reaching down
+// without end when it stands on the floor (below which there is no geometry), else the box.
 struct Occluder {
   Aabb box;
+  Aabb grounded;
   ObjectId object;
   ObjectId other;
 };
+
+// A segment between two points at or above the floor never passes below it, so a box whose
+// bottom is at or below the floor hides from such viewpoints exactly what the box reaching
+// down to -infinity hides; the deeper box survives shrinking by the cell's height.
+Aabb reaching_down(const Aabb& box, const Aabb& raw, float floor) {
+  if (raw.min.y > floor) return box;
+  Aabb out = box;
+  out.min.y = floor - kBelowFloor;
+  return out;
+}
+
+// Splits along every axis at least half as long as the longest: a flat 2D cell in x and z,
+// a cube in all three.
+std::vector<Aabb> children_of(const Aabb& box) {
+  const Vec3 size = box.size();
+  const float longest = std::max({size.x, size.y, size.z});
+  std::vector<Aabb> out{box};
+  for (int axis = 0; axis < 3; ++axis) {
+    if (size[axis] < 0.5f * longest) continue;
+    std::vector<Aabb> split;
+    for (const Aabb& b : out) {
+      const float mid = 0.5f * (b.min[axis] + b.max[axis]);
+      Aabb lower = b, upper = b;
+      lower.max[axis] = mid;
+      upper.min[axis] = mid;
+      split.push_back(lower);
+      split.push_back(upper);
+    }
+    out.swap(split);
+  }
+  return out;
+}
 
 // The geometry drawn is the decoded one: positions within half a quantisation step of the
 // box the directory records, plus float rounding. Grow the box by a full step and more.
@@ -96,26 +134,22 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   bool conservative() const override { return true; }
   const ConservativeStats& stats() const { return stats_; }
 
+  // The objects visible from some sub-cell of a refinement of the cell (a box is the union
+  // of its children, so hidden from the cell = hidden from every leaf it reaches).
   VisibleSet compute(const ViewCell& cell) const override {
     VisibleSet out;
     if (cell.solid) return out;
-    const Aabb& c = cell.box;
-    CubeDepthBuffer depth(c.center(), params_.face_resolution);
-    // Viewpoints of the cell must lie outside the occluder's solid for its parity argument.
-    std::vector<std::pair<double, const Occluder*>> usable;
-    for (const Occluder& o : occluders_)
-      if (!world_.object(o.object).bounds.overlaps(c) && !world_.object(o.other).bounds.overlaps(c))
-        usable.push_back({distance_between(o.box, c), &o});
-    // Front to back: pixels the near occluders cover skip the far ones' work.
-    std::sort(usable.begin(), usable.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::vector<const Occluder*> near;
-    for (const auto& [distance, o] : usable) {
-      if (params_.occluder_shrinking) render_shrunk(o->box, c, depth);
-      if (params_.corner_test && distance <= params_.corner_test_radius) near.push_back(o);
+    std::vector<uint8_t> visible(occludees_.size(), 0);
+    std::vector<ObjectId> candidates;
+    for (ObjectId id = 0; id < occludees_.size(); ++id) {
+      if (occludees_[id].overlaps(cell.box))
+        visible[id] = 1;  // around a viewpoint: nothing can hide it
+      else
+        candidates.push_back(id);
     }
+    refine(cell.box, 0, std::move(candidates), visible);
     for (ObjectId id = 0; id < occludees_.size(); ++id)
-      if (!hidden(id, c, depth, near)) out.objects.push_back(id);
+      if (visible[id]) out.objects.push_back(id);
     return out;
   }
 
@@ -124,7 +158,45 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   ConservativeParams params_;
   std::vector<Aabb> occludees_;    // per object, the drawn geometry's box
   std::vector<Occluder> occluders_;  // ascending object ids
+  float floor_ = 0.0f;               // no decoded geometry lies below this height
   ConservativeStats stats_;
+
+  // Tests the candidates from `box`; those not hidden from it are visible when the box is a
+  // leaf of the refinement, else they are tested from each child, minus those an earlier
+  // child already showed to be visible.
+  void refine(const Aabb& box, int level, std::vector<ObjectId> candidates,
+              std::vector<uint8_t>& visible) const {
+    std::erase_if(candidates, [&](ObjectId id) { return visible[id] != 0; });
+    if (candidates.empty()) return;
+    CubeDepthBuffer depth(box.center(), params_.face_resolution);
+    for (ObjectId id : candidates) depth.demand(occludees_[id]);
+    const std::vector<const Occluder*> near = render_occluders(box, depth);
+    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth, near); });
+    if (level >= params_.refine_levels) {
+      for (ObjectId id : candidates) visible[id] = 1;
+      return;
+    }
+    for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, visible);
+  }
+
+  // Renders the shrunk occluders usable from `box` into the buffer, front to back (pixels the
+  // near ones cover skip the far ones' work); returns those the corner test tries.
+  std::vector<const Occluder*> render_occluders(const Aabb& box, CubeDepthBuffer& depth) const {
+    const bool above_floor = box.min.y >= floor_;
+    std::vector<std::pair<double, const Occluder*>> usable;
+    for (const Occluder& o : occluders_)
+      // Viewpoints must lie outside the occluder's solid for its crossing argument.
+      if (!world_.object(o.object).bounds.overlaps(box) && !world_.object(o.other).bounds.overlaps(box))
+        usable.push_back({distance_between(o.box, box), &o});
+    std::sort(usable.begin(), usable.end(),
+              [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<const Occluder*> near;
+    for (const auto& [distance, o] : usable) {
+      if (params_.occluder_shrinking) render_shrunk(above_floor ? o->grounded : o->box, box, depth);
+      if (params_.corner_test && distance <= params_.corner_test_radius) near.push_back(o);
+    }
+    return near;
+  }
 
   // Two sound shrinkings, each better where the other is weak: the erosion by the whole cell
   // (seen from any direction), and the per-face lateral one (no loss along the view axis,
@@ -139,7 +211,6 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth,
               const std::vector<const Occluder*>& near) const {
     const Aabb& box = occludees_[id];
-    if (box.overlaps(cell)) return false;
     if (params_.occluder_shrinking && depth.hidden(box)) return true;
     const Vec3 eye = cell.center(), target = box.center();
     for (const Occluder* o : near)
@@ -156,6 +227,7 @@ class ConservativeEngineImpl final : public VisibilityEngine {
                                         params_.min_box_gain};
     const size_t count = world_.object_count();
     std::vector<visibility::InscribedBoxes> per_object(count);
+    std::vector<float> lowest(count, std::numeric_limits<float>::max());
     std::atomic<size_t> next{0};
     std::mutex failure_mutex;
     std::exception_ptr failure;
@@ -163,8 +235,9 @@ class ConservativeEngineImpl final : public VisibilityEngine {
       try {
         for (size_t id; (id = next++) < count;) {
           const std::vector<uint8_t> bytes = world_.read_level(ObjectId(id), 0);
-          per_object[id] = visibility::inscribed_boxes(
-              world_.decode_level(ObjectId(id), 0, bytes), op);
+          const Mesh mesh = world_.decode_level(ObjectId(id), 0, bytes);
+          lowest[id] = bounds_of(mesh).min.y;
+          per_object[id] = visibility::inscribed_boxes(mesh, op);
         }
       } catch (...) {
         std::lock_guard lock(failure_mutex);
@@ -178,13 +251,14 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (unsigned t = 0; t < threads; ++t) pool.emplace_back(work);
     for (std::thread& t : pool) t.join();
     if (failure) std::rethrow_exception(failure);
+    floor_ = count ? *std::min_element(lowest.begin(), lowest.end()) : 0.0f;
     for (size_t id = 0; id < count; ++id) {
       stats_.closed_objects += per_object[id].closed;
       stats_.occluder_objects += !per_object[id].boxes.empty();
       stats_.mean_fill += largest_fill(per_object[id].boxes, world_.object(ObjectId(id)).bounds) /
                           double(count);
       for (const Aabb& b : per_object[id].boxes)
-        occluders_.push_back({pulled_in(b), ObjectId(id), ObjectId(id)});
+        add_occluder(b, ObjectId(id), ObjectId(id));
     }
     add_bridges(per_object);
   }
@@ -204,9 +278,15 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (size_t i = 0; i < boxes.size(); ++i)
       for (size_t j = i + 1; j < boxes.size() && boxes[j].box.min.x <= boxes[i].box.max.x; ++j)
         for (const Aabb& bridge : visibility::bridge_boxes(boxes[i].box, boxes[j].box)) {
-          occluders_.push_back({pulled_in(bridge), boxes[i].object, boxes[j].object});
+          add_occluder(bridge, boxes[i].object, boxes[j].object);
           ++stats_.bridges;
         }
+  }
+
+  void add_occluder(const Aabb& raw, ObjectId object, ObjectId other) {
+    const Aabb box = pulled_in(raw);
+    occluders_.push_back({box, params_.grounded_occluders ? reaching_down(box, raw, floor_) : box,
+                          object, other});
   }
 };
 

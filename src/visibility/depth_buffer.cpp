@@ -66,10 +66,22 @@ double depth_range(const FaceAxes& f, const glm::dvec3& lo, const glm::dvec3& hi
   return f.sign > 0 ? (far ? hi[f.a] : lo[f.a]) : (far ? -lo[f.a] : -hi[f.a]);
 }
 
+// Points of the box seen in a face lie at depth >= their max-norm distance from the eye,
+// hence >= the box's: clipping there keeps the projection finite. <= 0: the box holds the eye.
+double max_norm_distance(const glm::dvec3& lo, const glm::dvec3& hi) {
+  double distance = 0.0;
+  for (int a = 0; a < 3; ++a) distance = std::max({distance, lo[a], -hi[a]});
+  return distance;
+}
+
 }  // namespace
 
 CubeDepthBuffer::CubeDepthBuffer(const Vec3& eye, int resolution)
-    : eye_(eye), n_(resolution), depth_(size_t(6) * resolution * resolution, kFar) {}
+    : eye_(eye),
+      n_(resolution),
+      tiles_((resolution + kTile - 1) / kTile),
+      depth_(size_t(6) * resolution * resolution, kFar),
+      tile_max_(size_t(6) * tiles_ * tiles_, kFar) {}
 
 void CubeDepthBuffer::add_occluder(const Aabb& box) { add_occluder_for_cell(box, Vec3(0.0f)); }
 
@@ -97,56 +109,86 @@ void CubeDepthBuffer::add_to_face(int face, const glm::dvec3& lo, const glm::dve
   const int i1 = std::min(n_, int(std::floor((fp.u1 + 1.0) * scale)));
   const int j0 = std::max(0, int(std::ceil((fp.w0 + 1.0) * scale)));
   const int j1 = std::min(n_, int(std::floor((fp.w1 + 1.0) * scale)));
+  const double skip = std::max(near, 0.0);  // pixels at or nearer than this gain nothing
   float* pixels = depth_.data() + size_t(face) * n_ * n_;
-  for (int j = j0; j < j1; ++j)
-    for (int i = i0; i < i1; ++i) {
-      float& pixel = pixels[size_t(j) * n_ + i];
-      if (double(pixel) <= std::max(near, 0.0)) continue;  // nearer already: no gain
-      const double u0 = i / scale - 1.0, u1 = (i + 1) / scale - 1.0;
-      const double w0 = j / scale - 1.0, w1 = (j + 1) / scale - 1.0;
-      const double erode_u = half[f.b] + half[f.a] * std::max(std::abs(u0), std::abs(u1));
-      const double erode_w = half[f.c] + half[f.a] * std::max(std::abs(w0), std::abs(w1));
-      glm::dvec3 elo = lo, ehi = hi;
-      elo[f.b] += erode_u, ehi[f.b] -= erode_u;
-      elo[f.c] += erode_w, ehi[f.c] -= erode_w;
-      if (elo[f.b] > ehi[f.b] || elo[f.c] > ehi[f.c]) continue;
-      const double d = std::max({entry_depth(f, elo, ehi, u0, w0), entry_depth(f, elo, ehi, u1, w0),
-                                 entry_depth(f, elo, ehi, u0, w1), entry_depth(f, elo, ehi, u1, w1)});
-      if (d == kFar) continue;
-      // Round up: the stored depth may only exceed the occluder's.
-      pixel = std::min(pixel, std::nextafter(float(d), kFar));
+  for (int tj = j0 / kTile; tj * kTile < j1; ++tj)
+    for (int ti = i0 / kTile; ti * kTile < i1; ++ti) {
+      if (double(tile_max_[tile_index(face, ti, tj)]) <= skip) continue;
+      bool wrote = false;
+      for (int j = std::max(j0, tj * kTile); j < std::min(j1, (tj + 1) * kTile); ++j)
+        for (int i = std::max(i0, ti * kTile); i < std::min(i1, (ti + 1) * kTile); ++i) {
+          float& pixel = pixels[size_t(j) * n_ + i];
+          if (double(pixel) <= skip || !wanted(face, i, j)) continue;
+          const double u0 = i / scale - 1.0, u1 = (i + 1) / scale - 1.0;
+          const double w0 = j / scale - 1.0, w1 = (j + 1) / scale - 1.0;
+          const double erode_u = half[f.b] + half[f.a] * std::max(std::abs(u0), std::abs(u1));
+          const double erode_w = half[f.c] + half[f.a] * std::max(std::abs(w0), std::abs(w1));
+          glm::dvec3 elo = lo, ehi = hi;
+          elo[f.b] += erode_u, ehi[f.b] -= erode_u;
+          elo[f.c] += erode_w, ehi[f.c] -= erode_w;
+          if (elo[f.b] > ehi[f.b] || elo[f.c] > ehi[f.c]) continue;
+          const double d = std::max({entry_depth(f, elo, ehi, u0, w0), entry_depth(f, elo, ehi, u1, w0),
+                                     entry_depth(f, elo, ehi, u0, w1), entry_depth(f, elo, ehi, u1, w1)});
+          if (d == kFar) continue;
+          // Round up: the stored depth may only exceed the occluder's.
+          pixel = std::min(pixel, std::nextafter(float(d), kFar));
+          wrote = true;
+        }
+      if (wrote) update_tile(face, ti, tj);
+    }
+}
+
+void CubeDepthBuffer::update_tile(int face, int ti, int tj) {
+  float largest = -kFar;
+  for (int j = tj * kTile; j < std::min(n_, (tj + 1) * kTile); ++j)
+    for (int i = ti * kTile; i < std::min(n_, (ti + 1) * kTile); ++i)
+      if (wanted(face, i, j)) largest = std::max(largest, depth_[(size_t(face) * n_ + j) * n_ + i]);
+  tile_max_[tile_index(face, ti, tj)] = largest;
+}
+
+std::optional<CubeDepthBuffer::PixelRect> CubeDepthBuffer::occludee_pixels(int face, const glm::dvec3& lo,
+                                                                          const glm::dvec3& hi) const {
+  const FaceAxes f = axes_of(face);
+  const double distance = max_norm_distance(lo, hi);
+  const double far = depth_range(f, lo, hi, true);
+  if (far < distance) return std::nullopt;  // no point of the box in this face's pyramid
+  const double near = std::max(depth_range(f, lo, hi, false), distance);
+  Footprint fp = project(f, lo, hi, near, far);
+  constexpr double kPad = 1e-9;  // projection rounding: overestimate the occludee
+  fp.u0 -= kPad, fp.w0 -= kPad, fp.u1 += kPad, fp.w1 += kPad;
+  if (fp.u0 > 1.0 || fp.w0 > 1.0 || fp.u1 < -1.0 || fp.w1 < -1.0) return std::nullopt;
+  const double scale = 0.5 * n_;
+  auto pixel = [&](double x) { return std::clamp(int(std::floor((x + 1.0) * scale)), 0, n_ - 1); };
+  return PixelRect{pixel(fp.u0), pixel(fp.u1), pixel(fp.w0), pixel(fp.w1), near};
+}
+
+void CubeDepthBuffer::demand(const Aabb& box) {
+  const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
+  if (demand_.empty()) {
+    demand_.assign(depth_.size(), 0);
+    std::fill(tile_max_.begin(), tile_max_.end(), -kFar);  // no pixel wanted yet
+  }
+  if (max_norm_distance(lo, hi) <= 0.0) return;  // never hidden: reads nothing
+  for (int face = 0; face < 6; ++face)
+    if (const auto r = occludee_pixels(face, lo, hi)) {
+      for (int j = r->j0; j <= r->j1; ++j)
+        std::fill_n(demand_.begin() + ptrdiff_t((size_t(face) * n_ + j) * n_ + r->i0), r->i1 - r->i0 + 1, 1);
+      for (int tj = r->j0 / kTile; tj <= r->j1 / kTile; ++tj)
+        for (int ti = r->i0 / kTile; ti <= r->i1 / kTile; ++ti) update_tile(face, ti, tj);
     }
 }
 
 bool CubeDepthBuffer::hidden(const Aabb& box) const {
   const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
-  // Points of the box seen in a face lie at depth >= their max-norm distance from the eye,
-  // hence >= the box's: clipping there keeps the projection finite.
-  double distance = 0.0;
-  for (int a = 0; a < 3; ++a) distance = std::max({distance, lo[a], -hi[a]});
-  if (distance <= 0.0) return false;
-  for (int face = 0; face < 6; ++face)
-    if (!hidden_in_face(face, lo, hi, distance)) return false;
-  return true;
-}
-
-bool CubeDepthBuffer::hidden_in_face(int face, const glm::dvec3& lo, const glm::dvec3& hi,
-                                     double distance) const {
-  const FaceAxes f = axes_of(face);
-  const double far = depth_range(f, lo, hi, true);
-  if (far < distance) return true;  // no point of the box in this face's pyramid
-  const double near = std::max(depth_range(f, lo, hi, false), distance);
-  Footprint fp = project(f, lo, hi, near, far);
-  constexpr double kPad = 1e-9;  // projection rounding: overestimate the occludee
-  fp.u0 -= kPad, fp.w0 -= kPad, fp.u1 += kPad, fp.w1 += kPad;
-  if (fp.u0 > 1.0 || fp.w0 > 1.0 || fp.u1 < -1.0 || fp.w1 < -1.0) return true;
-  const double scale = 0.5 * n_;
-  auto pixel = [&](double x) { return std::clamp(int(std::floor((x + 1.0) * scale)), 0, n_ - 1); };
-  const int i0 = pixel(fp.u0), i1 = pixel(fp.u1), j0 = pixel(fp.w0), j1 = pixel(fp.w1);
-  const float* pixels = depth_.data() + size_t(face) * n_ * n_;
-  for (int j = j0; j <= j1; ++j)
-    for (int i = i0; i <= i1; ++i)
-      if (!(double(pixels[size_t(j) * n_ + i]) < near)) return false;
+  if (max_norm_distance(lo, hi) <= 0.0) return false;
+  for (int face = 0; face < 6; ++face) {
+    const auto r = occludee_pixels(face, lo, hi);
+    if (!r) continue;
+    const float* pixels = depth_.data() + size_t(face) * n_ * n_;
+    for (int j = r->j0; j <= r->j1; ++j)
+      for (int i = r->i0; i <= r->i1; ++i)
+        if (!(double(pixels[size_t(j) * n_ + i]) < r->near)) return false;
+  }
   return true;
 }
 

@@ -7,6 +7,8 @@
 // thesis §5.5.2 (the six faces of a cube around the viewpoint).
 #pragma once
 
+#include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "cellwalk/geometry.hpp"
@@ -19,6 +21,11 @@ class CubeDepthBuffer {
  public:
   // REQUIRES: resolution >= 1 (pixels per face side).
   CubeDepthBuffer(const Vec3& eye, int resolution);
+
+  // Limits later rendering to the pixels hidden(box) reads, summed over calls: rendering is
+  // the cost, and only pixels some occludee is tested against can change an answer. Without
+  // any call, every pixel is rendered. REQUIRES: no occluder rendered yet.
+  void demand(const Aabb& box);
 
   // Renders a box occluder: after the call, every ray from the eye through a pixel the box
   // covers entirely meets the box at a depth no greater than the pixel's.
@@ -40,12 +47,31 @@ class CubeDepthBuffer {
   double covered_fraction() const;
 
  private:
+  static constexpr int kTile = 8;  // pixels per side of a tile
+
   glm::dvec3 eye_;
   int n_;
-  std::vector<float> depth_;  // 6 faces of n × n, +inf where no occluder covers the pixel
+  int tiles_;                     // per face side
+  std::vector<float> depth_;      // 6 faces of n × n, +inf where no occluder covers the pixel
+  std::vector<uint8_t> demand_;   // empty (all pixels) or 1 per pixel hidden() may read
+  // Per tile, the largest depth of its wanted pixels (-inf if none): an occluder no nearer
+  // than that cannot improve the tile, so whole tiles are skipped.
+  std::vector<float> tile_max_;
 
+  bool wanted(int face, int i, int j) const {
+    return demand_.empty() || demand_[(size_t(face) * n_ + j) * n_ + i] != 0;
+  }
+  size_t tile_index(int face, int ti, int tj) const { return (size_t(face) * tiles_ + tj) * tiles_ + ti; }
+  void update_tile(int face, int ti, int tj);
+
+  struct PixelRect {
+    int i0, i1, j0, j1;  // inclusive
+    double near;         // the depth the box's points in the face lie at or beyond
+  };
+  // The pixels the part of an occludee box (relative to the eye) inside a face's pyramid may
+  // touch; nullopt when no point of the box lies in the pyramid.
+  std::optional<PixelRect> occludee_pixels(int face, const glm::dvec3& lo, const glm::dvec3& hi) const;
   void add_to_face(int face, const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& half);
-  bool hidden_in_face(int face, const glm::dvec3& lo, const glm::dvec3& hi, double near) const;
 };
 
 }  // namespace cellwalk::visibility

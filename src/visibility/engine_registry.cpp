@@ -34,7 +34,11 @@ std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const Wor
                                               const EngineOptions& options) {
   if (name == "sampling") return std::make_unique<visibility::SamplingEngine>(world, options);
   if (name == "dov") return std::make_unique<DovWithPrior>(world, options);
-  if (name == "conservative") return make_conservative_engine(world, ConservativeParams{});
+  if (name == "conservative") {
+    ConservativeParams params;
+    params.refine_levels = options.refine_levels;
+    return make_conservative_engine(world, params);
+  }
   std::string known;
   for (const std::string& n : engine_names()) known += (known.empty() ? "" : ", ") + n;
   fail("visibility engine '" + name + "'", "unknown; the engines are " + known);

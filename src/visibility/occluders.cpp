@@ -9,6 +9,8 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <functional>
+#include <optional>
 #include <unordered_map>
 
 namespace cellwalk::visibility {
@@ -334,17 +336,50 @@ bool is_closed(const Mesh& mesh) {
   return !edges.empty();
 }
 
-InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params) {
-  InscribedBoxes out;
-  out.closed = is_closed(mesh);
-  if (params.grid < 1 || !out.closed) return out;
+namespace {
+
+// Triangles grouped into connected components (sharing welded vertices), each as its own
+// compact mesh. Generated and modelled objects are assemblies of overlapping closed parts:
+// the faces of one part that lie inside another cut the whole mesh's interior into slices
+// (floors between floor slabs, walls lined with window boxes), but each part alone is a clean
+// solid.
+std::vector<Mesh> components_of(const Mesh& mesh) {
+  const std::vector<uint32_t> id = welded_ids(mesh);
+  std::vector<uint32_t> parent(mesh.positions.size());
+  for (uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+  auto root = [&](uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3)
+    for (int e = 1; e < 3; ++e) parent[root(id[mesh.indices[t + e]])] = root(id[mesh.indices[t]]);
+  std::unordered_map<uint32_t, size_t> component;  // root -> index in out
+  std::vector<Mesh> out;
+  std::vector<std::unordered_map<uint32_t, uint32_t>> remap;
+  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
+    const uint32_t r = root(id[mesh.indices[t]]);
+    const auto [it, added] = component.emplace(r, out.size());
+    if (added) out.emplace_back(), remap.emplace_back();
+    Mesh& m = out[it->second];
+    for (int v = 0; v < 3; ++v) {
+      const uint32_t source = mesh.indices[t + v];
+      const auto [at, fresh] = remap[it->second].emplace(source, uint32_t(m.positions.size()));
+      if (fresh) m.positions.push_back(mesh.positions[source]);
+      m.indices.push_back(at->second);
+    }
+  }
+  return out;
+}
+
+// The inscribed boxes of one closed mesh, on its own classification grid.
+std::vector<Aabb> boxes_of_solid(const Mesh& mesh, const OccluderParams& params) {
   const Aabb bounds = bounds_of(mesh);
   Grid g;
   g.n = params.grid;
   for (int a = 0; a < 3; ++a) {
     g.origin[a] = bounds.min[a];
     g.voxel[a] = (double(bounds.max[a]) - double(bounds.min[a])) / g.n;
-    if (!(g.voxel[a] > 0.0)) return out;  // flat: no volume to stand in for
+    if (!(g.voxel[a] > 0.0)) return {};  // flat: no volume to stand in for
   }
   std::vector<uint8_t> surface(g.size(), 0);
   mark_surface(g, mesh, surface);
@@ -352,8 +387,82 @@ InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params) {
   const bool winding = is_oriented(mesh);
   for (int axis = 0; axis < 3; ++axis) vote_inside(g, mesh, axis, winding, interior);
   for (size_t v = 0; v < g.size(); ++v) interior[v] = interior[v] && !surface[v];
-  for (const Aabb& box : boxes_in(g, interior, params))
-    out.boxes.push_back(extend_to_surface(mesh, box));
+  std::vector<Aabb> out;
+  for (const Aabb& box : boxes_in(g, interior, params)) out.push_back(extend_to_surface(mesh, box));
+  return out;
+}
+
+double volume(const Aabb& b) {
+  const Vec3 s = glm::max(b.size(), Vec3(0.0f));
+  return double(s.x) * s.y * s.z;
+}
+
+bool inside(const Aabb& inner, const Aabb& outer) {
+  return glm::all(glm::greaterThanEqual(inner.min, outer.min)) &&
+         glm::all(glm::lessThanEqual(inner.max, outer.max));
+}
+
+// A closed part all of whose triangles lie in the faces of its bounding box is that box: a
+// closed surface inside a sphere's surface is all of it, so crossing parity says "inside"
+// exactly in the box.
+std::optional<Aabb> box_part(const Mesh& part) {
+  const Aabb b = bounds_of(part);
+  for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
+    bool on_face = false;
+    for (int a = 0; a < 3 && !on_face; ++a)
+      for (const float side : {b.min[a], b.max[a]}) {
+        bool all = true;
+        for (int v = 0; v < 3; ++v) all = all && part.positions[part.indices[t + v]][a] == side;
+        on_face = on_face || all;
+      }
+    if (!on_face) return std::nullopt;
+  }
+  return b;
+}
+
+// The largest boxes first, up to max_boxes, each at least min_gain of the largest's volume
+// and not inside one already kept.
+std::vector<Aabb> largest_boxes(std::vector<Aabb> candidates, const OccluderParams& params) {
+  std::sort(candidates.begin(), candidates.end(),
+            [](const Aabb& a, const Aabb& b) { return volume(a) > volume(b); });
+  std::vector<Aabb> out;
+  for (const Aabb& box : candidates) {
+    if (int(out.size()) == params.max_boxes) break;
+    if (!out.empty() && volume(box) < params.min_gain * volume(out.front())) break;
+    if (std::none_of(out.begin(), out.end(), [&](const Aabb& kept) { return inside(box, kept); }))
+      out.push_back(box);
+  }
+  return out;
+}
+
+}  // namespace
+
+InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params) {
+  InscribedBoxes out;
+  out.closed = is_closed(mesh);
+  if (params.grid < 1) return out;
+  // Each closed part bounds a solid of its own (the crossing argument holds part by part);
+  // a mesh whose parts close only together is classified whole. Parts are taken largest
+  // first; one whose bounding box is smaller than min_gain of the largest box found cannot
+  // give a box that would be kept, so it is not classified (window frames, railings).
+  std::vector<Mesh> parts = components_of(mesh);
+  std::vector<std::pair<double, size_t>> order;
+  for (size_t i = 0; i < parts.size(); ++i) order.push_back({volume(bounds_of(parts[i])), i});
+  std::sort(order.begin(), order.end(), std::greater<>());
+  std::vector<Aabb> candidates;
+  double largest = 0.0;
+  bool any_closed_part = false;
+  for (const auto& [part_volume, i] : order) {
+    if (part_volume < params.min_gain * largest || !is_closed(parts[i])) continue;
+    any_closed_part = true;
+    const std::optional<Aabb> whole = box_part(parts[i]);
+    for (const Aabb& b : whole ? std::vector<Aabb>{*whole} : boxes_of_solid(parts[i], params)) {
+      candidates.push_back(b);
+      largest = std::max(largest, volume(b));
+    }
+  }
+  if (!any_closed_part && out.closed) candidates = boxes_of_solid(mesh, params);
+  out.boxes = largest_boxes(std::move(candidates), params);
   return out;
 }
 
