@@ -105,10 +105,13 @@ void CubeDepthBuffer::add_to_face(int face, const glm::dvec3& lo, const glm::dve
   Footprint fp{-1.0, 1.0, -1.0, 1.0};  // a box across the eye's plane may cover it all
   if (near > 0.0) fp = project(f, lo, hi, near, far);
   const double scale = 0.5 * n_;
-  const int i0 = std::max(0, int(std::ceil((fp.u0 + 1.0) * scale)));
-  const int i1 = std::min(n_, int(std::floor((fp.u1 + 1.0) * scale)));
-  const int j0 = std::max(0, int(std::ceil((fp.w0 + 1.0) * scale)));
-  const int j1 = std::min(n_, int(std::floor((fp.w1 + 1.0) * scale)));
+  // Footprints of boxes just beyond the eye's plane reach far outside the face: clamp in
+  // double before converting, so the int conversion stays defined.
+  const auto pixel = [&](double t) { return std::clamp((t + 1.0) * scale, 0.0, double(n_)); };
+  const int i0 = int(std::ceil(pixel(fp.u0)));
+  const int i1 = int(std::floor(pixel(fp.u1)));
+  const int j0 = int(std::ceil(pixel(fp.w0)));
+  const int j1 = int(std::floor(pixel(fp.w1)));
   const double skip = std::max(near, 0.0);  // pixels at or nearer than this gain nothing
   float* pixels = depth_.data() + size_t(face) * n_ * n_;
   for (int tj = j0 / kTile; tj * kTile < j1; ++tj)
@@ -158,7 +161,7 @@ std::optional<CubeDepthBuffer::PixelRect> CubeDepthBuffer::occludee_pixels(int f
   fp.u0 -= kPad, fp.w0 -= kPad, fp.u1 += kPad, fp.w1 += kPad;
   if (fp.u0 > 1.0 || fp.w0 > 1.0 || fp.u1 < -1.0 || fp.w1 < -1.0) return std::nullopt;
   const double scale = 0.5 * n_;
-  auto pixel = [&](double x) { return std::clamp(int(std::floor((x + 1.0) * scale)), 0, n_ - 1); };
+  auto pixel = [&](double x) { return int(std::floor(std::clamp((x + 1.0) * scale, 0.0, double(n_ - 1)))); };
   return PixelRect{pixel(fp.u0), pixel(fp.u1), pixel(fp.w0), pixel(fp.w1), near};
 }
 
