@@ -1,14 +1,14 @@
 // `cellwalk bench review`: HDoV thesis §4.4 (digest §5.4) reproduced on a generated city.
 #include "metrics/review_bench.hpp"
 
+#include "metrics/bench_support.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <numeric>
 
-#include <unistd.h>
 
 #include "cellwalk/atomic_file.hpp"
 #include "cellwalk/error.hpp"
@@ -27,6 +27,12 @@
 namespace cellwalk {
 namespace {
 
+using bench::fixed;
+using bench::md_table;
+using bench::mean;
+using bench::variance;
+using bench::write_csv;
+
 using Json = nlohmann::ordered_json;
 namespace fs = std::filesystem;
 
@@ -39,20 +45,6 @@ const double kThesisOptimal[] = {410.95, 169.96, 265.88, 201.89, 212.48};
 const std::map<double, std::pair<double, double>> kThesisCulling = {
     {1.0, {91.34, 34.93}}, {1.2, {92.26, 46.13}}, {1.5, {92.93, 50.53}},
     {2.1, {93.99, 61.02}}, {2.5, {94.86, 65.16}}, {3.1, {95.33, 90.77}}};
-
-std::string fixed(double v, int digits) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-  return buf;
-}
-
-double mean(const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size()); }
-double variance(const std::vector<double>& v) {
-  const double m = mean(v);
-  double s = 0;
-  for (double x : v) s += (x - m) * (x - m);
-  return v.empty() ? 0.0 : s / double(v.size());
-}
 
 struct World3 {
   std::string file;
@@ -226,50 +218,15 @@ std::string settings(const ReviewBenchParams& p, double sf, const std::string& e
          fixed(p.cache_mib, 4) + (extra.empty() ? "" : "," + extra);
 }
 
-void write_csv(const fs::path& file, const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
-  std::string text;
-  for (size_t i = 0; i < header.size(); ++i) text += (i ? "," : "") + header[i];
-  text += "\n";
-  for (const auto& row : rows) {
-    for (size_t i = 0; i < row.size(); ++i) text += (i ? "," : "") + row[i];
-    text += "\n";
-  }
-  write_file_atomically(file.string(), text);
-}
-
 void write_plot(const fs::path& file, LinePlot plot) { write_file_atomically(file.string(), render_svg(plot)); }
-
-std::string md_table(const std::vector<std::string>& header, const std::vector<std::vector<std::string>>& rows) {
-  std::string t = "|";
-  for (const auto& h : header) t += " " + h + " |";
-  t += "\n|";
-  for (size_t i = 0; i < header.size(); ++i) t += "---|";
-  t += "\n";
-  for (const auto& row : rows) {
-    t += "|";
-    for (const auto& c : row) t += " " + c + " |";
-    t += "\n";
-  }
-  return t;
-}
 
 }  // namespace
 
 Json run_review_bench(const ReviewBenchParams& p) {
   const fs::path out = fs::path(p.out_dir) / "review";
   fs::create_directories(out);
-  const bool temporary = p.work_dir.empty();
-  const fs::path work = temporary ? fs::temp_directory_path() / ("cellwalk-review-" + std::to_string(::getpid()))
-                                  : fs::path(p.work_dir);
-  fs::create_directories(work);
-  struct Cleanup {
-    fs::path dir;
-    bool on;
-    ~Cleanup() {
-      std::error_code ec;
-      if (on) fs::remove_all(dir, ec);
-    }
-  } cleanup{work, temporary};
+  const bench::WorkDir work_dir(p.work_dir, "review");
+  const fs::path& work = work_dir.path();
 
   Stopwatch total;
   std::vector<World3> worlds;
