@@ -1,6 +1,7 @@
 // libFuzzer target for the visible-set codec (src/visibility/set_codec.hpp): any input must
-// decode to strictly ascending in-range ids that re-encode to the same bytes, or give a
-// cellwalk::Error; never a crash or an unbounded allocation.
+// decode (as a Δ, and as a bitmask) to strictly ascending in-range ids that re-encode to the
+// same bytes, or give a cellwalk::Error; never a crash or an unbounded allocation.
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -26,6 +27,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     for (size_t i = 1; i < base.size(); ++i)
       if (base[i] <= base[i - 1]) std::abort();
   } catch (const cellwalk::Error&) {
+  }
+  // The bitmask form: the first byte gives the object count, the rest is the mask.
+  if (size > 0) {
+    const uint64_t objects = data[0];
+    size_t at = 1;
+    try {
+      const std::vector<cellwalk::ObjectId> ids = read_bitmask(bytes, at, "fuzz", objects);
+      std::vector<uint8_t> again{data[0]};
+      append_bitmask(again, ids, objects);
+      if (at != again.size() || !std::equal(again.begin(), again.end(), data)) std::abort();
+    } catch (const cellwalk::Error&) {
+    }
   }
   return 0;
 }

@@ -21,6 +21,7 @@
 #include "cellwalk/random.hpp"
 #include "test_support.hpp"
 #include "visibility/backface_test.hpp"
+#include "visibility/box_tree.hpp"
 #include "visibility/depth_buffer.hpp"
 #include "visibility/occluders.hpp"
 
@@ -170,6 +171,72 @@ TEST(CubeDepthBuffer, OccluderAroundTheEyeHidesAcrossFaces) {
 }
 
 // ---- back-face test (vLOD §5.3) -----------------------------------------------------------
+
+// The engine skips every occluder (group) for which may_lower says no: the buffer must answer
+// exactly as if all had been rendered. Oracle: a second buffer that renders them all.
+TEST(CubeDepthBuffer, SkippingWhatMayNotLowerChangesNoAnswer) {
+  Random rng(23);
+  auto random_box = [&](float spread, float size) {
+    const Vec3 c(float(rng.uniform(-spread, spread)), float(rng.uniform(-spread / 4, spread / 4)),
+                 float(rng.uniform(-spread, spread)));
+    const Vec3 h(float(rng.uniform(0.2, size)), float(rng.uniform(0.2, size)), float(rng.uniform(0.2, size)));
+    return Aabb{c - h, c + h};
+  };
+  const Vec3 eye(0.0f), half(0.5f, 0.25f, 0.5f);
+  int hidden = 0, skipped = 0;
+  for (int trial = 0; trial < 20; ++trial) {
+    CubeDepthBuffer all(eye, 32), culled(eye, 32);
+    std::vector<Aabb> occludees;
+    for (int i = 0; i < 60; ++i) occludees.push_back(random_box(80.0f, 3.0f));
+    std::erase_if(occludees, [&](const Aabb& b) { return b.overlaps(Aabb{eye - Vec3(1.0f), eye + Vec3(1.0f)}); });
+    for (const Aabb& b : occludees) all.demand(b), culled.demand(b);
+    std::vector<Aabb> occluders;
+    for (int i = 0; i < 80; ++i) occluders.push_back(random_box(60.0f, 12.0f));
+    std::erase_if(occluders, [&](const Aabb& b) { return b.overlaps(Aabb{eye - 2.0f * half, eye + 2.0f * half}); });
+    std::sort(occluders.begin(), occluders.end(), [&](const Aabb& a, const Aabb& b) {
+      return glm::length(a.center() - eye) < glm::length(b.center() - eye);
+    });
+    for (const Aabb& o : occluders) {
+      const Aabb eroded{o.min + half, o.max - half};
+      const bool render = culled.may_lower(o);
+      skipped += !render;
+      for (CubeDepthBuffer* d : {&all, &culled}) {
+        if (d == &culled && !render) continue;
+        if (!eroded.empty()) d->add_occluder(eroded);
+        d->add_occluder_for_cell(o, half);
+      }
+    }
+    for (const Aabb& b : occludees) {
+      EXPECT_EQ(all.hidden(b), culled.hidden(b)) << trial;
+      hidden += all.hidden(b);
+    }
+  }
+  EXPECT_GT(hidden, 50);   // the scenes do occlude
+  EXPECT_GT(skipped, 100);  // and the check does skip
+}
+
+TEST(BoxTree, WalkFindsExactlyTheBoxesABruteForceScanFinds) {
+  Random rng(29);
+  std::vector<Aabb> boxes;
+  for (int i = 0; i < 500; ++i) {
+    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
+    boxes.push_back({c, c + Vec3(float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)))});
+  }
+  const visibility::BoxTree tree(boxes);
+  std::vector<int> seen(boxes.size(), 0);
+  tree.front_to_back(boxes[0], [](const Aabb&) { return true; }, [&](uint32_t i) { ++seen[i]; });
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), ptrdiff_t(boxes.size()));  // each once
+  for (int q = 0; q < 50; ++q) {
+    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
+    const Aabb query{c, c + Vec3(float(rng.uniform(1, 20)))};
+    std::set<uint32_t> found, expected;
+    tree.front_to_back(query, [&](const Aabb& group) { return group.overlaps(query); },
+                       [&](uint32_t i) { if (boxes[i].overlaps(query)) found.insert(i); });
+    for (uint32_t i = 0; i < boxes.size(); ++i)
+      if (boxes[i].overlaps(query)) expected.insert(i);
+    EXPECT_EQ(found, expected) << q;
+  }
+}
 
 TEST(BackfaceTest, ConeBoundsEveryDirection) {
   Random rng(5);

@@ -83,6 +83,27 @@ TEST(SetCodec, DamagedInputGivesErrorNotCrash) {
   EXPECT_THROW(get_varint(endless, pos, "test"), Error);
 }
 
+TEST(SetCodec, BitmasksRoundTripAndRejectStrayBits) {
+  Random rng(7);
+  for (uint32_t universe : {1u, 7u, 8u, 9u, 5000u})
+    for (double density : {0.0, 0.3, 1.0}) {
+      const std::vector<ObjectId> ids = random_set(rng, universe, density);
+      std::vector<uint8_t> bytes{0xAB};  // appends after what is there
+      append_bitmask(bytes, ids, universe);
+      ASSERT_EQ(bytes.size(), 1 + bitmask_bytes(universe));
+      size_t pos = 1;
+      EXPECT_EQ(read_bitmask(bytes, pos, "test", universe), ids);
+      EXPECT_EQ(pos, bytes.size());
+      size_t cut = 1;
+      EXPECT_THROW(read_bitmask(std::span(bytes).first(bytes.size() - 1), cut, "test", universe), Error);
+      if (universe % 8 != 0) {  // a bit past the last object
+        bytes.back() |= uint8_t(0x80);
+        pos = 1;
+        EXPECT_THROW(read_bitmask(bytes, pos, "test", universe), Error);
+      }
+    }
+}
+
 TEST(SetCodec, RandomBytesNeverCrash) {
   Random rng(11);
   for (int trial = 0; trial < 2000; ++trial) {

@@ -8,11 +8,13 @@
 #include <fstream>
 
 #include "cellwalk/error.hpp"
+#include "cellwalk/random.hpp"
 #include "cellwalk/visibility.hpp"
 #include "test_support.hpp"
 #include "visibility/dov_engine.hpp"
 #include "visibility/ground_truth.hpp"
 #include "visibility/pvs_builder.hpp"
+#include "visibility/set_codec.hpp"
 
 namespace cellwalk {
 namespace {
@@ -203,6 +205,37 @@ TEST(PvsBuilder, StoresShardsMergesAndResumes) {
   const World m(dir.file("merged.cww"));
   const visibility::StoredPvs pvs(m);
   for (const auto& [cell, set] : sets) EXPECT_EQ(pvs.set(cell)->objects, set.objects) << cell;
+}
+
+// Each cell's record is the smallest of gap-coded ids, a bitmask and a Δ from a neighbour, so
+// the stored sets never exceed a bitmask and a form byte per cell, whatever their density;
+// they read back exactly.
+TEST(PvsBuilder, StoredSetsNeverExceedABitmask) {
+  test::TempDir dir;
+  const World world(test::write_street_world(dir, 40));
+  const visibility::EmbreeScene scene(world);
+  const auto partition = visibility::make_partition("grid:8", world, scene);
+  Random rng(17);
+  for (double density : {0.05, 0.6, 1.0}) {
+    visibility::CellSets sets;
+    for (CellId c = 0; c < partition->cell_count(); ++c) {
+      if (partition->cell(c).solid) continue;
+      VisibleSet& set = sets[c];
+      for (ObjectId id = 0; id < world.object_count(); ++id)
+        if (rng.chance(density)) set.objects.push_back(id);
+    }
+    const visibility::PvsRun run{"sampling", false, "codec test"};
+    const std::string out = dir.file("codec.cww");
+    const visibility::PvsSizes sizes = visibility::write_world_with_pvs(world, out, *partition, sets, run);
+    EXPECT_EQ(sizes.bitmask_bytes, visibility::bitmask_bytes(world.object_count()) * sizes.cells_with_sets);
+    EXPECT_LE(sizes.stored_bytes, sizes.bitmask_bytes + sizes.cells) << density;
+    if (density >= 0.6) {
+      EXPECT_LT(sizes.stored_bytes, sizes.full_bytes) << density;  // gaps cost a byte per id
+    }
+    const World stored(out);
+    const visibility::StoredPvs pvs(stored);
+    for (const auto& [cell, set] : sets) EXPECT_EQ(pvs.set(cell)->objects, set.objects) << cell;
+  }
 }
 
 TEST(PvsCommand, ChecksAnEngineAgainstGroundTruth) {

@@ -6,9 +6,10 @@
 //   refine    the conservative engine at each refinement level (0 = no refinement), same cells;
 //   storage   the conservative sets of a block of neighbouring cells, gap-coded, stored (full or
 //             Δ from a neighbour, as `cellwalk pvs` writes them) and as plain bitmasks;
-//   target    conservative sets for a run of cells on `threads` threads, cells per second, and
-//             the time for 4,096 cells extrapolated from it (the target: < 10 min on
-//             2 cores for a 10^7-triangle city).
+//   target    conservative sets for a block of cells on `threads` threads, cells per second, and
+//             the time for 4,096 cells: measured on a 64 × 64 block of the 10^7-triangle city
+//             with --large, else extrapolated from the storage block (the target:
+//             < 10 min on 2 cores for a 10^7-triangle city).
 // Writes <out>/visibility.md and <out>/visibility/{engines,refine,storage,target}.csv,
 // tightness.svg.
 #pragma once
@@ -34,7 +35,7 @@ struct VisibilityBenchParams {
   int truth_resolution = 512;         // cube-map face resolution of the ground truth
   std::vector<int> refine_levels = {0, 1, 2, 3};
   int storage_side = 8;               // a storage_side² block of neighbouring cells
-  int target_cells = 32;              // cells of the target run
+  int large_target_side = 64;         // with --large, the 10^7 city's target block: 64² = 4,096 cells, measured
   int threads = 2;
   std::string out_dir = "docs/results";
   std::string work_dir;      // empty = a temporary directory, removed at the end

@@ -15,6 +15,7 @@
 #include <mutex>
 #include <thread>
 
+#include "visibility/box_tree.hpp"
 #include "visibility/depth_buffer.hpp"
 #include "visibility/occluders.hpp"
 
@@ -124,6 +125,10 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (ObjectId id = 0; id < world.object_count(); ++id)
       occludees_.push_back(occludee_box(world.object(id).bounds));
     derive_occluders();
+    std::vector<Aabb> bounds;
+    bounds.reserve(occluders_.size());
+    for (const Occluder& o : occluders_) bounds.push_back(o.grounded);  // holds o.box too
+    tree_ = std::make_unique<visibility::BoxTree>(bounds);
     stats_.objects = world.object_count();
     stats_.occluder_boxes = occluders_.size() - stats_.bridges;
     stats_.occluder_seconds =
@@ -158,6 +163,7 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   ConservativeParams params_;
   std::vector<Aabb> occludees_;    // per object, the drawn geometry's box
   std::vector<Occluder> occluders_;  // ascending object ids
+  std::unique_ptr<visibility::BoxTree> tree_;  // over occluders_' grounded boxes
   float floor_ = 0.0f;               // no decoded geometry lies below this height
   ConservativeStats stats_;
 
@@ -170,8 +176,8 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     if (candidates.empty()) return;
     CubeDepthBuffer depth(box.center(), params_.face_resolution);
     for (ObjectId id : candidates) depth.demand(occludees_[id]);
-    const std::vector<const Occluder*> near = render_occluders(box, depth);
-    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth, near); });
+    if (params_.occluder_shrinking) render_occluders(box, depth);
+    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth); });
     if (level >= params_.refine_levels) {
       for (ObjectId id : candidates) visible[id] = 1;
       return;
@@ -179,46 +185,62 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, visible);
   }
 
-  // Renders the shrunk occluders usable from `box` into the buffer, front to back (pixels the
-  // near ones cover skip the far ones' work); returns those the corner test tries.
-  std::vector<const Occluder*> render_occluders(const Aabb& box, CubeDepthBuffer& depth) const {
+  // Viewpoints must lie outside the occluder's solid for its crossing argument.
+  bool usable(const Occluder& o, const Aabb& region) const {
+    return !world_.object(o.object).bounds.overlaps(region) && !world_.object(o.other).bounds.overlaps(region);
+  }
+
+  // Renders the shrunk occluders usable from `box` into the buffer, front to back. Groups of
+  // occluders that can lower no wanted pixel (behind what is already rendered, or outside
+  // every candidate's projection) are skipped whole: the buffer is the same as rendering all
+  // (each pixel keeps the minimum), only cheaper.
+  void render_occluders(const Aabb& box, CubeDepthBuffer& depth) const {
     const bool above_floor = box.min.y >= floor_;
-    std::vector<std::pair<double, const Occluder*>> usable;
-    for (const Occluder& o : occluders_)
-      // Viewpoints must lie outside the occluder's solid for its crossing argument.
-      if (!world_.object(o.object).bounds.overlaps(box) && !world_.object(o.other).bounds.overlaps(box))
-        usable.push_back({distance_between(o.box, box), &o});
-    std::sort(usable.begin(), usable.end(),
-              [](const auto& a, const auto& b) { return a.first < b.first; });
-    std::vector<const Occluder*> near;
-    for (const auto& [distance, o] : usable) {
-      if (params_.occluder_shrinking) render_shrunk(above_floor ? o->grounded : o->box, box, depth);
-      if (params_.corner_test && distance <= params_.corner_test_radius) near.push_back(o);
-    }
-    return near;
+    tree_->front_to_back(
+        box, [&](const Aabb& group) { return depth.may_lower(group); },
+        [&](uint32_t i) {
+          const Occluder& o = occluders_[i];
+          const Aabb& shape = above_floor ? o.grounded : o.box;
+          if (usable(o, box) && !too_small(shape, box.center(), params_.face_resolution) && depth.may_lower(shape))
+            render_shrunk(shape, box, depth);
+        });
   }
 
   // Two sound shrinkings, each better where the other is weak: the erosion by the whole cell
   // (seen from any direction), and the per-face lateral one (no loss along the view axis,
   // so thin and deep occluders survive, but a larger loss at oblique pixels).
   void render_shrunk(const Aabb& occluder, const Aabb& cell, CubeDepthBuffer& depth) const {
-    if (too_small(occluder, cell.center(), params_.face_resolution)) return;
     const Aabb s = shrunk(occluder, cell);
     if (!s.empty()) depth.add_occluder(s);
     depth.add_occluder_for_cell(occluder, cell.size() * 0.5f);
   }
 
-  bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth,
-              const std::vector<const Occluder*>& near) const {
+  bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth) const {
     const Aabb& box = occludees_[id];
     if (params_.occluder_shrinking && depth.hidden(box)) return true;
+    return params_.corner_test && corner_test_hides(id, cell);
+  }
+
+  // HDoV §5.5.1 with each usable occluder within corner_test_radius of the cell whose box the
+  // centre-to-centre segment meets (a cheap necessary condition), found through the tree.
+  bool corner_test_hides(ObjectId id, const Aabb& cell) const {
+    const Aabb& box = occludees_[id];
     const Vec3 eye = cell.center(), target = box.center();
-    for (const Occluder* o : near)
-      // The centre-to-centre segment must meet the occluder: a cheap necessary condition.
-      if (o->object != id && o->other != id && visibility::segment_meets_box(eye, target, o->box) &&
-          visibility::occluder_hides(cell, o->box, box))
-        return true;
-    return false;
+    const float radius2 = float(params_.corner_test_radius * params_.corner_test_radius);
+    bool found = false;
+    tree_->front_to_back(
+        cell,
+        [&](const Aabb& group) {
+          return !found && visibility::BoxTree::gap(group, cell) <= radius2 &&
+                 visibility::segment_meets_box(eye, target, group);
+        },
+        [&](uint32_t i) {
+          const Occluder& o = occluders_[i];
+          found = found || (o.object != id && o.other != id && distance_between(o.box, cell) <= params_.corner_test_radius &&
+                            usable(o, cell) && visibility::segment_meets_box(eye, target, o.box) &&
+                            visibility::occluder_hides(cell, o.box, box));
+        });
+    return found;
   }
 
   // Decodes level 0 of every object, in parallel, and keeps its inscribed boxes.

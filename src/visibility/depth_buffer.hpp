@@ -43,8 +43,21 @@ class CubeDepthBuffer {
   // at a smaller depth. False when the box contains the eye.
   bool hidden(const Aabb& box) const;
 
+  // False only when rendering any occluder inside `box` (add_occluder or add_occluder_for_cell
+  // of a box it contains) would change no wanted pixel: every tile its projection touches has
+  // no wanted pixel deeper than the box's nearest depth in that face. Lets a front-to-back walk
+  // skip whole groups of occluders without changing the buffer.
+  bool may_lower(const Aabb& box) const;
+
   // Fraction of the sphere's pixels with an occluder, for reports.
   double covered_fraction() const;
+
+  // Entry and exit depths of the rays through a pixel's two edges into one slab (add_to_face),
+  // valid for the add_to_face call whose stamp it carries.
+  struct Span {
+    double enter, exit;
+    uint64_t stamp;
+  };
 
  private:
   static constexpr int kTile = 8;  // pixels per side of a tile
@@ -57,6 +70,8 @@ class CubeDepthBuffer {
   // Per tile, the largest depth of its wanted pixels (-inf if none): an occluder no nearer
   // than that cannot improve the tile, so whole tiles are skipped.
   std::vector<float> tile_max_;
+  std::vector<Span> columns_, rows_;  // add_to_face's scratch, per pixel column and row
+  uint64_t stamp_ = 0;                // add_to_face calls so far
 
   bool wanted(int face, int i, int j) const {
     return demand_.empty() || demand_[(size_t(face) * n_ + j) * n_ + i] != 0;

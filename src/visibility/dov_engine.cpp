@@ -12,8 +12,7 @@
 namespace cellwalk::visibility {
 
 DovEngine::DovEngine(const World& world, const EngineOptions& options, const VisibilityEngine* prior)
-    : world_(world),
-      prior_(prior),
+    : prior_(prior),
       cube_(world, options.dov_resolution),
       weights_(cube_pixel_weights(options.dov_resolution, options.dov_midpoint_weights)),
       smallest_(*std::min_element(weights_.begin(), weights_.end())) {}

@@ -23,7 +23,6 @@ class DovEngine : public VisibilityEngine {
   double smallest_dov() const { return smallest_; }
 
  private:
-  const World& world_;
   const VisibilityEngine* prior_;
   CubeMapRenderer cube_;
   std::vector<double> weights_;

@@ -26,7 +26,7 @@ namespace {
 
 constexpr char kPartMagic[8] = {'C', 'W', 'P', 'V', 'S', 'C', 'K', '1'};
 constexpr uint32_t kPvsVersion = 1;
-constexpr uint8_t kNoSet = 0, kFullSet = 1, kDeltaSet = 2;
+constexpr uint8_t kNoSet = 0, kFullSet = 1, kDeltaSet = 2, kBitmaskSet = 3;
 
 float parse_float(const std::string& spec, const std::string& text) {
   try {
@@ -279,8 +279,9 @@ std::vector<uint8_t> encode_dov_section(const ViewCellPartition& partition, cons
   return std::move(w.bytes());
 }
 
-// Each cell's record: a Δ from an earlier face neighbour stored in full, when that is smaller
-// than the full set. References are always full sets, so any cell decodes in at most two steps.
+// Each cell's record: the smallest of its gap-coded ids, its bitmask and a Δ from an earlier
+// face neighbour stored on its own (gap-coded or bitmask). References are never Δs, so any cell
+// decodes in at most two steps, and no record is longer than a bitmask and its tag byte.
 std::vector<uint8_t> encode_pvs_section(const ViewCellPartition& partition, const CellSets& sets,
                                         uint64_t object_count, const PvsRun& run, PvsSizes& sizes) {
   std::vector<uint8_t> records;
@@ -298,6 +299,10 @@ std::vector<uint8_t> encode_pvs_section(const ViewCellPartition& partition, cons
     best.push_back(kFullSet);
     append_set(best, ids);
     sizes.full_bytes += best.size();
+    if (bitmask_bytes(object_count) < best.size() - 1) {
+      best.assign(1, kBitmaskSet);
+      append_bitmask(best, ids, object_count);
+    }
     for (CellId n : partition.face_neighbours(c)) {
       auto nt = sets.find(n);
       if (nt == sets.end()) continue;
@@ -313,7 +318,7 @@ std::vector<uint8_t> encode_pvs_section(const ViewCellPartition& partition, cons
       candidate.insert(candidate.end(), delta.begin(), delta.end());
       if (candidate.size() < best.size()) best = std::move(candidate);
     }
-    full[c] = best[0] == kFullSet;
+    full[c] = best[0] != kDeltaSet;
     sizes.delta_cells += full[c] ? 0 : 1;
     ++sizes.cells_with_sets;
     sizes.ids += ids.size();
@@ -406,11 +411,21 @@ std::vector<ObjectId> StoredPvs::decode(CellId cell, int depth) const {
   const std::string where = "pvs cell " + std::to_string(cell);
   if (rec.empty()) fail(where, "empty record");
   size_t pos = 1;
-  if (rec[0] == kFullSet) return read_set(rec, pos, where, object_count_);
-  if (rec[0] != kDeltaSet || depth > 0) fail(where, "bad record form");
-  const CellId ref = CellId(get_varint(rec, pos, where));
-  const SetDelta delta = read_delta(rec, pos, where, object_count_);
-  return apply_delta(decode(ref, depth + 1), delta);
+  std::vector<ObjectId> ids;
+  if (rec[0] == kFullSet) {
+    ids = read_set(rec, pos, where, object_count_);
+  } else if (rec[0] == kBitmaskSet) {
+    ids = read_bitmask(rec, pos, where, object_count_);
+  } else if (rec[0] == kDeltaSet && depth == 0) {
+    const uint64_t ref = get_varint(rec, pos, where);
+    if (ref >= partition_->cell_count()) fail(where, "Δ refers to cell " + std::to_string(ref) + ", past the last");
+    const SetDelta delta = read_delta(rec, pos, where, object_count_);
+    ids = apply_delta(decode(CellId(ref), depth + 1), delta);
+  } else {
+    fail(where, "bad record form " + std::to_string(rec[0]) + (depth > 0 ? " (a Δ must refer to a set stored on its own)" : ""));
+  }
+  if (pos != rec.size()) fail(where, std::to_string(rec.size() - pos) + " bytes after the set: record damaged");
+  return ids;
 }
 
 std::optional<VisibleSet> StoredPvs::set(CellId cell) const {

@@ -1,7 +1,7 @@
 // Precomputing visible sets for every view cell of a world and storing them in it: parallel
 // over cells, resumable from a checkpoint, splittable by cell range (--shard i/N) and merged.
 // The sets are stored as vLOD stores them (digest 001 §3.3–§3.4): gap-coded ids, or a Δ from a
-// face neighbour when that is smaller. HDoV thesis §5.5 (per-cell DoV). Layouts in
+// face neighbour, or (ours) a plain bitmask, whichever is the smallest. HDoV thesis §5.5 (per-cell DoV). Layouts in
 // docs/format.md, "Visibility sections".
 #pragma once
 
@@ -69,7 +69,7 @@ struct PvsSizes {
   uint64_t ids = 0;               // Σ set sizes
   uint64_t bitmask_bytes = 0;     // one bitmask per cell with a set
   uint64_t full_bytes = 0;        // every set gap-coded on its own
-  uint64_t stored_bytes = 0;      // the "pvs" records as stored (full or Δ, whichever is smaller)
+  uint64_t stored_bytes = 0;      // the "pvs" records as stored (gaps, bitmask or Δ, the smallest)
   uint64_t delta_cells = 0;       // cells stored as a Δ
   uint64_t face_pairs = 0;        // face-adjacent pairs of cells with sets
   uint64_t face_delta_bytes = 0;  // Σ over those pairs of the coded Δ (vLOD's per-face storage)

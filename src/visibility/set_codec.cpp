@@ -78,4 +78,28 @@ SetDelta read_delta(std::span<const uint8_t> bytes, size_t& pos, const std::stri
   return d;
 }
 
+void append_bitmask(std::vector<uint8_t>& out, std::span<const ObjectId> ids, uint64_t object_count) {
+  const size_t base = out.size();
+  out.resize(base + bitmask_bytes(object_count), 0);
+  for (ObjectId id : ids) out[base + id / 8] |= uint8_t(1u << (id % 8));
+}
+
+std::vector<ObjectId> read_bitmask(std::span<const uint8_t> bytes, size_t& pos, const std::string& where,
+                                   uint64_t object_count) {
+  const uint64_t length = bitmask_bytes(object_count);
+  if (pos > bytes.size() || length > bytes.size() - pos)
+    fail(where + "@" + std::to_string(pos), "bitmask of " + std::to_string(length) + " bytes is truncated");
+  std::vector<ObjectId> ids;
+  for (uint64_t byte = 0; byte < length; ++byte)
+    for (uint32_t bit = 0, b = bytes[pos + byte]; b != 0; ++bit, b >>= 1) {
+      if (!(b & 1)) continue;
+      const uint64_t id = byte * 8 + bit;
+      if (id >= object_count)
+        fail(where + "@" + std::to_string(pos + byte), "bitmask sets object " + std::to_string(id) + " past the last (" + std::to_string(object_count) + " objects)");
+      ids.push_back(ObjectId(id));
+    }
+  pos += length;
+  return ids;
+}
+
 }  // namespace cellwalk::visibility

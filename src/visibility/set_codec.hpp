@@ -1,7 +1,8 @@
 // Visible sets on disk, after vLOD §2.3–§2.4 (digest 001 §3.3–§3.4): sorted integer ids as
 // gaps in LEB128 varints (vLOD's RLE + delimiter code, replaced by bytes: simpler, and sets of
-// city cells are long lists of small gaps), and Δs between neighbouring cells as the pair
-// (added, removed) of gap-coded lists. Layout in docs/format.md, "Visibility sections".
+// city cells are long lists of small gaps), Δs between neighbouring cells as the pair
+// (added, removed) of gap-coded lists, and plain bitmasks for dense sets (ours: the stored
+// form is the smallest of the three, so never larger than a bitmask and its tag). Layout in docs/format.md, "Visibility sections".
 #pragma once
 
 #include <cstdint>
@@ -41,5 +42,14 @@ SetDelta read_delta(std::span<const uint8_t> bytes, size_t& pos, const std::stri
 
 // The size of the same set as a plain bitmask over all objects: ceil(object_count / 8).
 inline uint64_t bitmask_bytes(uint64_t object_count) { return (object_count + 7) / 8; }
+
+// Appends the set as a plain bitmask of bitmask_bytes(object_count) bytes: id i is bit i % 8
+// (least significant first) of byte i / 8. The form of choice for dense sets: it bounds a
+// stored set's size. REQUIRES: ids strictly ascending, all < object_count.
+void append_bitmask(std::vector<uint8_t>& out, std::span<const ObjectId> ids, uint64_t object_count);
+// Reads a bitmask written by append_bitmask at `pos`. Throws Error naming `where` when the
+// bytes are too few or a bit past object_count is set.
+std::vector<ObjectId> read_bitmask(std::span<const uint8_t> bytes, size_t& pos, const std::string& where,
+                                   uint64_t object_count);
 
 }  // namespace cellwalk::visibility
