@@ -1,7 +1,8 @@
 // CSearch (HDoV thesis §4.2.2, digest §3.3) as properties over random walks, checked against a
 // brute-force oracle and against Boost.Geometry's R-tree: the union of complement results is
-// what plain box queries load, results never repeat what the history returned, and with the
-// object buffer's eviction and history cut nothing is fetched twice while buffered.
+// what plain box queries load, results never repeat what the history returned, and REVIEW's
+// strategy, with the object buffer's eviction and history cut, loads at every query what a box
+// query would and fetches nothing twice while it is buffered.
 #include <gtest/gtest.h>
 
 #include <boost/geometry.hpp>
@@ -10,9 +11,12 @@
 #include <algorithm>
 #include <set>
 
+#include "cellwalk/path.hpp"
 #include "cellwalk/random.hpp"
+#include "cellwalk/review.hpp"
 #include "cellwalk/rtree.hpp"
-#include "strategy/review_object_buffer.hpp"
+#include "cellwalk/world.hpp"
+#include "test_support.hpp"
 
 namespace cellwalk {
 namespace {
@@ -131,46 +135,116 @@ TEST(ComplementSearch, UnionOverARandomWalkEqualsPlainBoxQueries) {
   }
 }
 
-// REVIEW's loop with the object buffer under a small budget: the history filter, the eviction
-// (keep what overlaps the new cell) and the history cut. After every query the buffer holds
-// every object of the current cell (what a plain box query would load), every object of every
-// history cell (CSearch's invariant), and no query returned an object that was buffered.
-TEST(ComplementSearch, EvictionCutsTheHistoryAndNothingIsFetchedTwiceWhileBuffered) {
-  const World3 w = make_world(2500, 9, RTreeMethod::kLinearInsert);
-  RTreeCacheOptions options;
-  options.bytes = 8 * 4096;  // a small DPLRU cache on the way
-  RTreeNodeCache cache(*w.tree, options);
-  constexpr uint64_t kObjectBytes = 1000;
-  review::ObjectBuffer buffer(200 * kObjectBytes);
-  uint64_t evictions = 0, filtered = 0;
-  for (const Aabb& cell : random_walk(5, 150)) {
-    const std::vector<Aabb> history = buffer.filtered_history(cell);
-    filtered += buffer.history().size() - history.size();
-    std::vector<uint32_t> got;
-    SearchCounters counters;
-    complement_search(cache, cell, history, got, counters);
-    const size_t group = buffer.begin_group(cell);
-    for (uint32_t id : got) {
-      ASSERT_FALSE(buffer.contains(id)) << "object " << id << " returned while buffered";
-      if (!buffer.budget().try_reserve(kObjectBytes)) {
-        buffer.evict_outside(std::span<const Aabb>(&cell, 1));
-        ++evictions;
-        ASSERT_TRUE(buffer.budget().try_reserve(kObjectBytes)) << "one cell must fit this test's buffer";
-      }
-      review::BufferedObject o;
-      o.id = id;
-      o.box = w.boxes[id];
-      o.reservation = review::Reservation(buffer.budget(), kObjectBytes);
-      ASSERT_TRUE(buffer.insert(group, std::move(o)));
-    }
-    buffer.record_cell(cell);
-    for (uint32_t id : boost_query(w, cell)) ASSERT_TRUE(buffer.contains(id)) << "object " << id << " of the cell";
-    for (const Aabb& h : buffer.history())
-      for (uint32_t id : boost_query(w, h)) ASSERT_TRUE(buffer.contains(id)) << "object " << id << " of a history cell";
-    ASSERT_LE(buffer.budget().used(), 200 * kObjectBytes);
+// A world of the same random boxes with its paged R-tree, for ReviewStrategy.
+std::string write_box_world(const test::TempDir& dir, const World3& w) {
+  std::vector<Object> objects;
+  for (size_t i = 0; i < w.boxes.size(); ++i) {
+    Object o;
+    o.id = ObjectId(i);
+    o.mesh = test::box_mesh(w.boxes[i]);
+    objects.push_back(std::move(o));
   }
-  EXPECT_GT(evictions, 3u);  // the budget did force evictions and history cuts
-  EXPECT_GT(filtered, 0u);   // and the filter dropped cells
+  const std::string file = test::write_world(dir, objects, NavGraph{}, "boxes");
+  RTreeParams params;
+  params.max_entries = 12;
+  add_rtree_to_world(file, params);
+  return file;
+}
+
+// A camera wandering over the world at 40 m/s, turning and now and then walking back over old
+// ground (the cells' random walk as a camera path).
+CameraPath wandering_path(uint64_t seed, int frames) {
+  Random rng(seed);
+  Vec3 position(750, 20, 750);
+  float yaw = 0;
+  CameraPath path;
+  for (int i = 0; i < frames; ++i) {
+    yaw += float(rng.uniform(-4, 4));
+    if (rng.chance(0.01)) yaw += 180;  // back over old cells
+    const Vec3 step(-std::sin(glm::radians(yaw)), 0, -std::cos(glm::radians(yaw)));
+    position = glm::clamp(position + step * 4.0f, Vec3(100, 20, 100), Vec3(1400, 20, 1400));
+    path.frames.push_back({0.1 * i, position, yaw, -10.0f});
+  }
+  return path;
+}
+
+// REVIEW itself (through the Strategy interface) walking a path under a small object buffer, so
+// that it evicts and cuts its history (Fig. 4.8 and the digest's fix). At every search, demand
+// or prefetch, checked against the brute-force oracle and Boost: the results lie in the cell and
+// together with what is buffered make up exactly what a plain box query of the cell would load;
+// the results that are buffered (left by a query that did not fit, so its cell is not in the
+// history) are exactly the ones the strategy skips: nothing is fetched twice while buffered.
+// After a frame's query completes, the whole cell is buffered.
+TEST(ComplementSearch, ReviewStrategyUnderEvictionLoadsWhatBoxQueriesWould) {
+  test::TempDir dir;
+  const World3 w = make_world(2500, 9, RTreeMethod::kLinearInsert);
+  const World world(write_box_world(dir, w));
+  ReviewStrategy review(world, parse_review_strategy_name("review:depth=150,sf=1.5,cache=0.032,buffer=0.25"),
+                        StrategyOptions{});
+  Strategy& strategy = review;
+  auto buffered = [&](ObjectId id) {
+    FrameStats scratch;
+    return strategy.mesh(DrawItem{id, 0, {}}, scratch) != nullptr;
+  };
+  auto box_query = [&](const Aabb& cell) {  // the oracle, checked against Boost
+    std::set<uint32_t> ids;
+    for (uint32_t i = 0; i < w.boxes.size(); ++i)
+      if (w.boxes[i].overlaps(cell)) ids.insert(i);
+    EXPECT_EQ(ids, boost_query(w, cell));
+    return ids;
+  };
+  uint64_t prefetches = 0, complement_skipped = 0;
+  std::vector<uint64_t> buffered_results;  // per search, in the order of queries()
+  review.set_search_observer([&](const ReviewQuery& q, std::span<const uint32_t> results) {
+    prefetches += q.prefetch ? 1 : 0;
+    const std::set<uint32_t> got(results.begin(), results.end());
+    ASSERT_EQ(got.size(), results.size()) << "a result repeats";
+    const std::set<uint32_t> plain = box_query(q.cell);
+    buffered_results.push_back(0);
+    for (uint32_t id : got) {
+      buffered_results.back() += buffered(id) ? 1 : 0;
+      ASSERT_TRUE(plain.count(id)) << "object " << id << " is not in the cell";
+    }
+    for (uint32_t id : plain) {
+      ASSERT_TRUE(got.count(id) || buffered(id)) << "object " << id << " of the cell neither returned nor buffered";
+      complement_skipped += got.count(id) ? 0 : 1;
+    }
+  });
+  Camera camera;
+  camera.fov_y_deg = 45;
+  camera.aspect = 1;
+  camera.near_plane = 0.5f;
+  camera.far_plane = 5000;
+  std::vector<DrawItem> items;
+  for (const PathFrame& f : wandering_path(5, 500).frames) {
+    apply(f, camera);
+    FrameStats stats;
+    stats.time = f.time;
+    const size_t before = review.queries().size();
+    strategy.select(camera, items, stats);
+    if (review.queries().size() == before) continue;
+    const ReviewQuery& q = review.queries().back();
+    if (q.dropped) continue;
+    for (uint32_t id : box_query(q.cell)) ASSERT_TRUE(buffered(id)) << "object " << id << " of the cell queried";
+  }
+  ASSERT_EQ(buffered_results.size(), review.queries().size());
+  uint64_t evictions = 0, demand = 0, skipped = 0;
+  for (size_t i = 0; i < buffered_results.size(); ++i) {
+    const ReviewQuery& q = review.queries()[i];
+    evictions += q.evictions;
+    demand += q.prefetch ? 0 : 1;
+    skipped += q.already_buffered;
+    EXPECT_EQ(q.fetched + q.already_buffered + q.dropped, q.results) << "query " << i;
+    if (q.dropped == 0) {  // a prefetch that did not fit stops counting at the first refusal
+      EXPECT_EQ(q.already_buffered, buffered_results[i]) << "query " << i << ": a buffered result was fetched";
+    }
+  }
+  EXPECT_LT(skipped * 20, complement_skipped) << "most of what is buffered is left out by CSearch itself";
+  EXPECT_GT(evictions, 3u) << "the budget must force evictions and history cuts";
+  EXPECT_GT(demand, 10u);
+  EXPECT_GT(prefetches, 5u);
+  EXPECT_GT(complement_skipped, 0u) << "CSearch must have left buffered objects out";
+  EXPECT_EQ(review.duplicate_fetches(), 0u);
 }
 
 }  // namespace

@@ -24,7 +24,9 @@
 // e.g. "review:k=1.2,sf=1.5" or "review-box:sf=3".
 #pragma once
 
+#include <functional>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -106,6 +108,12 @@ class ReviewStrategy : public Strategy {
   // Objects a merged prefetch brought that were buffered meanwhile (must stay 0: a demand
   // query first waits for and merges any prefetch in flight).
   uint64_t duplicate_fetches() const;
+
+  // For tests: called after every search (demand or prefetch) with its query so far (cell,
+  // history, node counts, results) and the ids it returned, before anything is fetched, on the
+  // thread that ran the search (the caller's, except with prefetch=background).
+  using SearchObserver = std::function<void(const ReviewQuery&, std::span<const uint32_t> results)>;
+  void set_search_observer(SearchObserver observer);
 
  private:
   struct Impl;

@@ -132,6 +132,17 @@ struct RTreeCacheOptions {
   DistancePriorityWeights weights;  // α = β = γ = 1/3
 };
 
+// The allocator's cost per heap block (glibc: an 8-byte header, 16-byte granularity), used by the
+// per-entry bookkeeping estimates of the index cache and REVIEW's object buffer.
+inline constexpr uint64_t kHeapBlockBytes = 16;
+
+// What one decoded node of `tree` costs resident, at most: its page or its decoded entries
+// (M of them), whichever is larger, plus its heap blocks and the node cache's bookkeeping for it
+// (the BufferManager's and the policy's entries, estimated from their node types). The index
+// cache charges each node this way (with its actual entry count); a search holds one node per
+// level beside the cache.
+uint64_t rtree_node_resident_bound(const DiskRTree& tree);
+
 // Node access for the searches. Thread-safety: node() may be called concurrently.
 class RTreeNodeCache {
  public:

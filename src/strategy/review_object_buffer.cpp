@@ -19,6 +19,12 @@ Reservation& Reservation::operator=(Reservation&& o) noexcept {
   return *this;
 }
 
+bool Reservation::try_grow(uint64_t bytes) {
+  if (!budget_->try_reserve(bytes)) return false;
+  bytes_ += bytes;
+  return true;
+}
+
 void Reservation::shrink_to(uint64_t bytes) {
   if (budget_ && bytes < bytes_) budget_->release(bytes_ - bytes);
   bytes_ = std::min(bytes, bytes_);
@@ -43,11 +49,17 @@ uint64_t pages_spanned(const World& world, const LodRecord& level) {
   return (level.offset + level.bytes - 1) / page - level.offset / page + 1;
 }
 
+// A list trimmed after removals holds at most twice its size, the bound the charges assume.
+template <class T>
+void trim(std::vector<T>& v) {
+  if (v.capacity() > 2 * v.size()) v.shrink_to_fit();
+}
+
 }  // namespace
 
 uint64_t fetch_bound(const World& world, ObjectId id) {
   const LodRecord& level = world.lod(id, 0);
-  return level.bytes + decoded_bound(level.triangles);
+  return level.bytes + decoded_bound(level.triangles) + kObjectBookkeepingBytes;
 }
 
 std::optional<BufferedObject> fetch_object(const World& world, ObjectId id, MemoryBudget& budget,
@@ -59,17 +71,21 @@ std::optional<BufferedObject> fetch_object(const World& world, ObjectId id, Memo
   o.box = world.object(id).bounds;
   o.reservation = Reservation(budget, bound);
   Stopwatch watch;
-  const std::vector<uint8_t> bytes = world.read_level(id, 0);
-  counters.io_ms += watch.lap_ms();
-  o.mesh = std::make_shared<const Mesh>(world.decode_level(id, 0, bytes));
-  counters.decode_ms += watch.lap_ms();
+  uint64_t encoded = 0;
+  {  // the encoded bytes are freed before the reservation shrinks
+    const std::vector<uint8_t> bytes = world.read_level(id, 0);
+    encoded = bytes.size();
+    counters.io_ms += watch.lap_ms();
+    o.mesh = std::make_shared<const Mesh>(world.decode_level(id, 0, bytes));
+    counters.decode_ms += watch.lap_ms();
+  }
   const uint64_t mesh_bytes = sizeof(Mesh) + o.mesh->byte_size();
-  if (mesh_bytes > bound - bytes.size())
+  if (mesh_bytes + kObjectBookkeepingBytes > bound - encoded)
     fail(world.file().path() + ": object " + std::to_string(id), "decodes to unreferenced vertices (the file is damaged)");
-  o.reservation.shrink_to(mesh_bytes);
+  o.reservation.shrink_to(mesh_bytes + kObjectBookkeepingBytes);
   ++counters.fetched;
   counters.pages += pages_spanned(world, world.lod(id, 0));
-  counters.bytes += bytes.size();
+  counters.bytes += encoded;
   return o;
 }
 
@@ -78,17 +94,15 @@ const Mesh* ObjectBuffer::mesh(ObjectId id) const {
   return it == objects_.end() ? nullptr : it->second.mesh.get();
 }
 
-size_t ObjectBuffer::begin_group(const Aabb& cell) {
-  // Groups emptied by evictions go here, not in evict_outside(): a query's group index must
-  // stay valid while it runs.
+void ObjectBuffer::begin_group(const Aabb& cell) {
   std::erase_if(groups_, [](const Group& g) { return g.members.empty(); });
+  trim(groups_);
   groups_.push_back({cell, Aabb{}, {}});
-  return groups_.size() - 1;
 }
 
-bool ObjectBuffer::insert(size_t group, BufferedObject object) {
-  if (objects_.count(object.id)) return false;
-  Group& g = groups_.at(group);
+bool ObjectBuffer::insert(BufferedObject object) {
+  if (objects_.contains(object.id)) return false;
+  Group& g = groups_.back();
   g.bounds.extend(object.box);
   g.members.push_back(object.id);
   const ObjectId id = object.id;
@@ -96,12 +110,21 @@ bool ObjectBuffer::insert(size_t group, BufferedObject object) {
   return true;
 }
 
-void ObjectBuffer::record_cell(const Aabb& cell) {
+bool ObjectBuffer::record_cell(const Aabb& cell) {
+  if (!history_bytes_.try_grow(kHistoryCellBytes)) return false;
   Aabb extent;
   for (const auto& [id, o] : objects_)
     if (o.box.overlaps(cell)) extent.extend(o.box);
   history_.push_back(cell);
   extents_.push_back(extent);
+  return true;
+}
+
+std::vector<ObjectId> ObjectBuffer::buffered_ids() const {
+  std::vector<ObjectId> ids;
+  ids.reserve(objects_.size());
+  for (const auto& entry : objects_) ids.push_back(entry.first);  // the map is ordered
+  return ids;
 }
 
 std::vector<Aabb> ObjectBuffer::filtered_history(const Aabb& cell) const {
@@ -124,6 +147,14 @@ size_t ObjectBuffer::evict_outside(std::span<const Aabb> keep) {
       ++removed;
       return true;
     });
+    trim(g.members);
+  }
+  if (!groups_.empty()) {  // emptied groups go, but not the newest: a query may be filling it
+    Group newest = std::move(groups_.back());
+    groups_.pop_back();
+    std::erase_if(groups_, [](const Group& g) { return g.members.empty(); });
+    groups_.push_back(std::move(newest));
+    trim(groups_);
   }
   auto same = [](const Aabb& a, const Aabb& b) { return a.min == b.min && a.max == b.max; };
   for (size_t i = history_.size(); i-- > 0;)
@@ -131,6 +162,7 @@ size_t ObjectBuffer::evict_outside(std::span<const Aabb> keep) {
       history_.erase(history_.begin() + std::ptrdiff_t(i));
       extents_.erase(extents_.begin() + std::ptrdiff_t(i));
     }
+  trim_history();
   return removed;
 }
 
@@ -140,6 +172,14 @@ void ObjectBuffer::clear() {
   objects_.clear();
   history_.clear();
   extents_.clear();
+  trim(groups_);
+  trim_history();
+}
+
+void ObjectBuffer::trim_history() {
+  trim(history_);
+  trim(extents_);
+  history_bytes_.shrink_to(history_.size() * kHistoryCellBytes);
 }
 
 }  // namespace cellwalk::review

@@ -2,7 +2,6 @@
 // against the history of queried cells (§4.2.2), the R-tree node cache (§4.2.4), prefetching at
 // F' = F + k·v (§4.2.5) and ViewCulling of the object buffer (§4.3). docs/review.md.
 #include <algorithm>
-#include <unordered_set>
 
 #include "cellwalk/error.hpp"
 #include "cellwalk/prefetcher.hpp"
@@ -44,6 +43,20 @@ struct PrefetchedCell {
   std::shared_ptr<Payload> payload;  // mutable behind the cache's const handle
 };
 
+// What the strategy holds beside the index cache and the object buffer, at most (docs/review.md,
+// "Memory"): the world's directory; a search's path of nodes outside the cache (every node
+// without one) and the raw page being decoded; a search's result list (at most every object, at
+// most twice its size); one prefetch in flight — its request and loader, its staged entry and
+// payload, the heap blocks of its list of buffered ids (whose slots the objects pay for), an
+// estimate — and the group a query has begun before any object is in it.
+uint64_t fixed_bytes_of(const World& world, const DiskRTree& tree) {
+  constexpr uint64_t kPrefetchBytes = sizeof(PrefetchRequest) + sizeof(PrefetchedCell::Payload) + 4 * sizeof(Aabb) +
+                                      32 * sizeof(void*) + 16 * kHeapBlockBytes;
+  return world.resident_bytes() + tree.height() * rtree_node_resident_bound(tree) + tree.page_size() +
+         2 * world.object_count() * sizeof(uint32_t) + kHeapBlockBytes + kPrefetchBytes +
+         2 * sizeof(ObjectBuffer::Group);
+}
+
 void add_fetch(ReviewQuery& q, const FetchCounters& f) {
   q.fetched += f.fetched;
   q.object_pages += f.pages;
@@ -58,14 +71,14 @@ struct ReviewStrategy::Impl {
       : world(w),
         config(c),
         tree(w),
-        fixed_bytes(w.resident_bytes() + uint64_t(tree.height()) * tree.page_size()),
+        fixed_bytes(fixed_bytes_of(w, tree)),
         cache(tree, cache_options(c)),
         buffer(object_limit(options)),
         staging(staging_budget, make_lru_policy()),
         prefetcher(staging, PrefetcherOptions{c.background_prefetch ? 1u : 0u, 1}) {}
 
-  // The object buffer's share of the budget: what the directory, a search's path of node pages
-  // and the index cache leave (or the configured size, which must fit).
+  // The object buffer's share of the budget: what the fixed part (fixed_bytes_of) and the index
+  // cache leave (or the configured size, which must fit).
   uint64_t object_limit(const StrategyOptions& options) const {
     uint64_t largest = 0;
     for (ObjectId id = 0; id < world.object_count(); ++id) largest = std::max(largest, review::fetch_bound(world, id));
@@ -98,6 +111,7 @@ struct ReviewStrategy::Impl {
   void make_disk_cell(const Aabb& cell, const Aabb& frustum);
   bool near_border(const Aabb& frustum) const;
   void demand_query(const Aabb& cell, FrameStats& stats);
+  bool record_cell(const Aabb& cell, ReviewQuery& q);
   void start_prefetch(const Camera& camera, const Aabb& frustum, FrameStats& stats);
   void merge_prefetches(FrameStats& stats);
   void settle_prefetch(FrameStats& stats);
@@ -109,7 +123,7 @@ struct ReviewStrategy::Impl {
   const World& world;
   const ReviewConfig config;
   DiskRTree tree;
-  const uint64_t fixed_bytes;  // the world's directory and one search path of node pages
+  const uint64_t fixed_bytes;  // fixed_bytes_of(): the directory, a search's transients, a prefetch
   RTreeNodeCache cache;
   ObjectBuffer buffer;
   MemoryBudget staging_budget{0};  // prefetched cells cost nothing here: their objects are
@@ -135,6 +149,7 @@ struct ReviewStrategy::Impl {
   std::vector<ReviewQuery> queries;
   std::vector<ReviewFrame> frames;
   uint64_t duplicates = 0;
+  SearchObserver observer;
 };
 
 void ReviewStrategy::Impl::select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) {
@@ -234,7 +249,8 @@ void ReviewStrategy::Impl::demand_query(const Aabb& cell, FrameStats& stats) {
   q.node_visits = sc.node_visits;
   q.node_reads = sc.node_reads;
   q.results = ids.size();
-  const size_t group = buffer.begin_group(cell);
+  if (observer) observer(q, ids);
+  buffer.begin_group(cell);
   FetchCounters fc;
   for (uint32_t id : ids) {
     if (buffer.contains(id)) {  // left by an incomplete query: not fetched again
@@ -252,13 +268,24 @@ void ReviewStrategy::Impl::demand_query(const Aabb& cell, FrameStats& stats) {
       ++q.dropped;
       continue;
     }
-    buffer.insert(group, std::move(*o));
+    buffer.insert(std::move(*o));
   }
-  if (q.dropped == 0 && config.complement()) buffer.record_cell(cell);
+  if (q.dropped == 0 && config.complement()) record_cell(cell, q);
   add_fetch(q, fc);
   stats.stall = stats.stall || q.dropped > 0;
   count_io(q, stats);
   queries.push_back(q);
+}
+
+// Enters a completed query's cell in the history. When the budget has no room for it, what does
+// not overlap the cell is evicted first, as for an object that does not fit; a cell still left
+// out only makes later searches return objects that are buffered (counted, not fetched).
+bool ReviewStrategy::Impl::record_cell(const Aabb& cell, ReviewQuery& q) {
+  if (buffer.record_cell(cell)) return true;
+  ++q.evictions;
+  buffer.evict_outside(std::span<const Aabb>(&cell, 1));
+  drop_prefetch();
+  return buffer.record_cell(cell);
 }
 
 // §4.2.5: the next disk cell, SF × the frustum cell centred on the far plane's centre moved by
@@ -275,13 +302,14 @@ void ReviewStrategy::Impl::start_prefetch(const Camera& camera, const Aabb& frus
   next = Next{next_key++, cell, buffer.eviction_epoch(), false, false};
   outstanding.push_back(next->key);
   auto history = std::make_shared<const std::vector<Aabb>>(buffer.filtered_history(cell));
-  auto buffered = std::make_shared<std::unordered_set<ObjectId>>();
-  for (const ObjectBuffer::Group& g : buffer.groups()) buffered->insert(g.members.begin(), g.members.end());
+  // Freed by the loader before it returns: the objects pay for its slots, and none is evicted
+  // while it runs (a demand query first waits for the prefetch).
+  auto buffered = std::make_shared<const std::vector<ObjectId>>(buffer.buffered_ids());
   const uint64_t at_frame = frame;
   PrefetchRequest request;
   request.key = next->key;
   request.epoch = frame;
-  request.loader = [this, cell, predicted, history, buffered, at_frame]() -> LoadedItem {
+  request.loader = [this, cell, predicted, history, buffered, at_frame]() mutable -> LoadedItem {
     auto payload = std::make_shared<PrefetchedCell::Payload>();
     ReviewQuery& q = payload->query;
     q.frame = at_frame;
@@ -297,9 +325,10 @@ void ReviewStrategy::Impl::start_prefetch(const Camera& camera, const Aabb& frus
     q.node_visits = sc.node_visits;
     q.node_reads = sc.node_reads;
     q.results = ids.size();
+    if (observer) observer(q, ids);
     FetchCounters fc;
     for (size_t i = 0; i < ids.size(); ++i) {
-      if (buffered->count(ids[i])) {
+      if (std::binary_search(buffered->begin(), buffered->end(), ids[i])) {
         ++q.already_buffered;
         continue;
       }
@@ -312,6 +341,8 @@ void ReviewStrategy::Impl::start_prefetch(const Camera& camera, const Aabb& frus
       payload->objects.push_back(std::move(*o));
     }
     add_fetch(q, fc);
+    buffered.reset();
+    history.reset();
     return {std::make_shared<const PrefetchedCell>(PrefetchedCell{payload}), 0};
   };
   prefetcher.submit(std::move(request));
@@ -334,12 +365,14 @@ void ReviewStrategy::Impl::merge_prefetches(FrameStats& stats) {
     }
     staging.erase(key);
     if (!next || next->key != key) return true;
-    const size_t group = buffer.begin_group(next->cell);
+    buffer.begin_group(next->cell);
     for (BufferedObject& o : payload->objects)
-      if (!buffer.insert(group, std::move(o))) ++duplicates;
+      if (!buffer.insert(std::move(o))) ++duplicates;
     next->merged = true;
-    next->complete = payload->complete && next->epoch == buffer.eviction_epoch();
-    if (next->complete) buffer.record_cell(next->cell);
+    // Not in the history (then queried again if adopted) if it raced an eviction, did not fit,
+    // or the budget has no room for the history entry.
+    next->complete =
+        payload->complete && next->epoch == buffer.eviction_epoch() && buffer.record_cell(next->cell);
     if (!config.background_prefetch) count_io(payload->query, stats);
     queries.push_back(payload->query);
     return true;
@@ -426,5 +459,6 @@ const ReviewConfig& ReviewStrategy::config() const { return impl_->config; }
 const std::vector<ReviewQuery>& ReviewStrategy::queries() const { return impl_->queries; }
 const std::vector<ReviewFrame>& ReviewStrategy::frames() const { return impl_->frames; }
 uint64_t ReviewStrategy::duplicate_fetches() const { return impl_->duplicates; }
+void ReviewStrategy::set_search_observer(SearchObserver observer) { impl_->observer = std::move(observer); }
 
 }  // namespace cellwalk
