@@ -1,4 +1,5 @@
 #include "cellwalk/walk.hpp"
+#include "cellwalk/world.hpp"
 
 #include <gtest/gtest.h>
 
@@ -148,7 +149,70 @@ TEST(WalkCommand, WritesCsvAndJson) {
                          " --every 10 --width 96 --height 64 --json -o " + dir.file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("\"mean_differing_fraction\": 0.0"), std::string::npos) << r.output;
-  EXPECT_TRUE(std::filesystem::exists(dir.file("cmp/frame0-diff.png")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("cmp/frame0-brute-diff.png")));
+}
+
+// Several strategies on one path: each writes its own files, and the table compares them with
+// the first. conv draws what brute draws (frustum culling both), so its fidelity is perfect too.
+TEST(WalkCommand, SeveralStrategiesSideBySide) {
+  test::TempDir dir;
+  const std::string world = test::write_street_world(dir, 20);
+  auto r = test::run_cellwalk("path " + world + " --frames 20 -o " + dir.file("p.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") +
+                         " --strategy brute --strategy ground-truth --width 96 --height 64 --json -o " + dir.file("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto all = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(all.size(), 2u);
+  EXPECT_EQ(all[0]["strategy"], "brute");
+  EXPECT_EQ(all[1]["strategy"], "ground-truth");
+  EXPECT_EQ(all[1]["frames"], 20);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/brute.json")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/ground-truth.json")));
+  std::ifstream table(dir.file("out/walk.md"));
+  std::string header, rule, first, second;
+  std::getline(table, header), std::getline(table, rule), std::getline(table, first), std::getline(table, second);
+  EXPECT_NE(header.find("speed-up vs brute"), std::string::npos) << header;
+  EXPECT_NE(first.find("| brute | "), std::string::npos) << first;
+  EXPECT_NE(first.find("1.00×"), std::string::npos) << first;
+  EXPECT_NE(second.find("| ground-truth | "), std::string::npos) << second;
+
+  r = test::run_cellwalk("compare " + world + " --path " + dir.file("p.txt") +
+                         " --strategy brute --strategy conv --every 5 --width 96 --height 64 -o " + dir.file("cmp"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::ifstream fidelity(dir.file("cmp/compare.md"));
+  std::string line;
+  int perfect = 0;
+  while (std::getline(fidelity, line))
+    if (line.find(" 0 of ") != std::string::npos && line.find("inf (identical)") != std::string::npos) ++perfect;
+  EXPECT_EQ(perfect, 2) << r.output;
+}
+
+// The hard budget end to end: a walk given a budget well below the world's geometry reports
+// that budget and a peak resident size under it in its summary JSON.
+TEST(WalkCommand, BudgetFarBelowTheWorldHoldsInTheSummary) {
+  test::TempDir dir;
+  const std::string world = test::write_street_world(dir, 40);
+  World opened(world);
+  uint64_t largest = 0, total = 0;
+  for (ObjectId id = 0; id < opened.object_count(); ++id) {
+    Mesh m = opened.decode_level(id, 0, opened.read_level(id, 0));
+    largest = std::max<uint64_t>(largest, sizeof(Mesh) + m.byte_size());
+    total += sizeof(Mesh) + m.byte_size();
+  }
+  const uint64_t budget = opened.resident_bytes() + 2 * largest;
+  ASSERT_LT(budget, opened.resident_bytes() + total / 3) << "the world is too small for the test";
+  auto r = test::run_cellwalk("path " + world + " --frames 40 -o " + dir.file("p.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const double budget_mib = double(budget) / 1048576.0;
+  r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") + " --budget " +
+                         std::to_string(budget_mib) + " --width 96 --height 64 -o " + dir.file("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto json = nlohmann::json::parse(std::ifstream(dir.file("out/brute.json")));
+  const uint64_t reported = json["budget_bytes"].get<uint64_t>();
+  EXPECT_NEAR(double(reported), double(budget), 1024.0);
+  EXPECT_GT(json["peak_resident_bytes"].get<uint64_t>(), 0u);
+  EXPECT_LE(json["peak_resident_bytes"].get<uint64_t>(), reported);
 }
 
 TEST(WalkCommand, BadPathFileGivesOneClearLine) {

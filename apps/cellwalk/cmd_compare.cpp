@@ -1,55 +1,91 @@
-// cellwalk compare: fidelity of a strategy against ground truth along a path.
+// cellwalk compare: fidelity of one strategy or several against ground truth along a path.
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 
 #include "cellwalk/atomic_file.hpp"
-#include "cellwalk/world.hpp"
 #include "cellwalk/walk.hpp"
+#include "cellwalk/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
+#include "metrics/bench_support.hpp"
 #include "replay_options.hpp"
 
 namespace cellwalk::app {
+namespace {
+
+struct CompareArgs : ReplayOptions {
+  CompareOptions options;
+};
+
+struct NamedFidelity {
+  std::string strategy;
+  FidelitySummary summary;
+};
+
+std::string psnr_text(double db) { return std::isfinite(db) ? bench::fixed(db, 1) : "inf (identical)"; }
+
+NamedFidelity compare_one(const CompareArgs& args, const World& world, const CameraPath& path, const std::string& name) {
+  auto strategy = make_strategy(name, world, args.strategy_options());
+  auto truth = make_strategy("ground-truth", world, {});
+  Renderer renderer(args.lens.render_settings());
+  CompareOptions options = args.options;
+  options.image_dir = options.max_images > 0 ? args.out : "";
+  Progress progress("compare " + name, path.frames.size());
+  auto frames = compare(path, args.lens.lens(), *strategy, *truth, renderer, options,
+                        [&](size_t done, size_t) { progress.update(done); });
+  progress.finish();
+  const FidelitySummary summary = summarize(frames);
+  const std::string stem = args.out + "/" + strategy->name() + "-fidelity";
+  write_fidelity_csv(frames, stem + ".csv");
+  write_file_atomically(stem + ".json", to_json(summary) + "\n");
+  if (!args.json)
+    std::printf("compare %s: %zu frames, differing pixels mean %.4f%% (max %.4f%%), PSNR %s dB,\n"
+                "  visible objects missed %llu of %llu (recall %.4f); wrote %s.csv\n",
+                strategy->name().c_str(), summary.frames, 100 * summary.mean_differing_fraction,
+                100 * summary.max_differing_fraction, psnr_text(summary.mean_psnr_db).c_str(),
+                (unsigned long long)summary.missed_objects, (unsigned long long)summary.visible_objects,
+                summary.recall, stem.c_str());
+  return {strategy->name(), summary};
+}
+
+std::string comparison_table(const std::vector<NamedFidelity>& runs) {
+  bench::Table rows;
+  for (const auto& [name, s] : runs)
+    rows.push_back({name, std::to_string(s.frames), bench::fixed(100 * s.mean_differing_fraction, 3),
+                    bench::fixed(100 * s.max_differing_fraction, 3), psnr_text(s.mean_psnr_db),
+                    std::to_string(s.missed_objects) + " of " + std::to_string(s.visible_objects),
+                    bench::fixed(s.recall, 4)});
+  return bench::md_table({"strategy", "frames compared", "differing pixels mean %", "max %", "PSNR dB",
+                          "visible objects missed", "recall"},
+                         rows);
+}
+
+}  // namespace
 
 void register_compare(CLI::App& root) {
   auto* cmd = root.add_subcommand(
-      "compare", "Render every k-th frame with a strategy and with ground truth; report the differences");
-  struct Args : ReplayOptions {
-    CompareOptions options;
-  };
-  auto args = std::make_shared<Args>();
+      "compare", "Render every k-th frame with one strategy or several and with ground truth; report the differences");
+  auto args = std::make_shared<CompareArgs>();
   args->add_to(*cmd, "out/compare");
   cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str();
   cmd->callback([args] {
     World world(args->world);
     CameraPath path = read_path(args->path);
-    auto strategy = make_strategy(args->strategy, world, args->strategy_options());
-    auto truth = make_strategy("ground-truth", world, {});
-    auto context = GlContext::headless();
-    Renderer renderer(args->lens.render_settings());
     args->make_output_folder();
-    args->options.image_dir = args->options.max_images > 0 ? args->out : "";
-    Progress progress("compare " + args->strategy, path.frames.size());
-    auto frames = compare(path, args->lens.lens(), *strategy, *truth, renderer, args->options,
-                          [&](size_t done, size_t) { progress.update(done); });
-    progress.finish();
-    FidelitySummary summary = summarize(frames);
-    const std::string stem = args->out + "/" + strategy->name() + "-fidelity";
-    write_fidelity_csv(frames, stem + ".csv");
-    write_file_atomically(stem + ".json", to_json(summary) + "\n");
+    auto context = GlContext::headless();
+    std::vector<NamedFidelity> runs;
+    for (const std::string& name : args->strategies) runs.push_back(compare_one(*args, world, path, name));
     if (args->json) {
-      std::printf("%s\n", to_json(summary).c_str());
-      return;
+      nlohmann::ordered_json all = nlohmann::ordered_json::array();
+      for (const auto& run : runs) all.push_back(nlohmann::ordered_json::parse(to_json(run.summary)));
+      std::printf("%s\n", (runs.size() == 1 ? all.front() : all).dump(2).c_str());
     }
-    std::printf("compare %s: %zu frames, differing pixels mean %.4f%% (max %.4f%%), PSNR %s dB,\n"
-                "  visible objects missed %llu of %llu (recall %.4f); wrote %s.csv\n",
-                strategy->name().c_str(), summary.frames, 100 * summary.mean_differing_fraction,
-                100 * summary.max_differing_fraction,
-                std::isfinite(summary.mean_psnr_db) ? std::to_string(summary.mean_psnr_db).c_str() : "inf (identical)",
-                (unsigned long long)summary.missed_objects, (unsigned long long)summary.visible_objects,
-                summary.recall, stem.c_str());
+    if (runs.size() < 2) return;
+    const std::string table = comparison_table(runs);
+    write_file_atomically(args->out + "/compare.md", table);
+    if (!args->json) std::printf("\n%s\nwrote %s/compare.md\n", table.c_str(), args->out.c_str());
   });
 }
 

@@ -1,40 +1,37 @@
-// cellwalk walk: replay a path headless with one strategy; per-frame CSV and summary JSON.
+// cellwalk walk: replay a path headless with one strategy or several side by side; per-frame
+// CSV and summary JSON per strategy, and a table comparing them.
 #include <cstdio>
 #include <filesystem>
 
-#include "cellwalk/world.hpp"
+#include "cellwalk/atomic_file.hpp"
 #include "cellwalk/walk.hpp"
+#include "cellwalk/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
+#include "metrics/bench_support.hpp"
 #include "replay_options.hpp"
 
 namespace cellwalk::app {
+namespace {
 
-void register_walk(CLI::App& root) {
-  auto* cmd = root.add_subcommand("walk", "Replay a camera path with one strategy and measure every frame");
-  auto args = std::make_shared<ReplayOptions>();
-  args->add_to(*cmd, "out/walk");
-  cmd->callback([args] {
-    World world(args->world);
-    CameraPath path = read_path(args->path);
-    args->make_output_folder();
-    const StrategyOptions options = args->strategy_options();
-    auto strategy = make_strategy(args->strategy, world, options);
-    auto context = GlContext::headless();
-    Renderer renderer(args->lens.render_settings());
-    Progress progress("walk " + args->strategy, path.frames.size());
-    auto frames = walk(path, args->lens.lens(), *strategy, renderer,
-                       [&](size_t done, size_t) { progress.update(done); });
-    progress.finish();
-    WalkSummary summary = summarize(strategy->name(), frames);
-    summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
-    const std::string stem = args->out + "/" + strategy->name();
-    write_frames_csv(frames, stem + ".csv");
-    write_summary_json(summary, stem + ".json");
-    if (args->json) {
-      std::printf("%s\n", to_json(summary).c_str());
-      return;
-    }
+// One strategy over the path, with a renderer of its own so no strategy inherits another's
+// GPU buffers.
+WalkSummary walk_one(const ReplayOptions& args, const World& world, const CameraPath& path,
+                     const std::string& name) {
+  const StrategyOptions options = args.strategy_options();
+  auto strategy = make_strategy(name, world, options);
+  Renderer renderer(args.lens.render_settings());
+  Progress progress("walk " + name, path.frames.size());
+  auto frames = walk(path, args.lens.lens(), *strategy, renderer,
+                     [&](size_t done, size_t) { progress.update(done); });
+  progress.finish();
+  WalkSummary summary = summarize(strategy->name(), frames);
+  summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
+  summary.budget_bytes = options.memory_budget_bytes;
+  const std::string stem = args.out + "/" + strategy->name();
+  write_frames_csv(frames, stem + ".csv");
+  write_summary_json(summary, stem + ".json");
+  if (!args.json)
     std::printf("walk %s: %zu frames, frame time mean %.2f ms (sd %.2f, p95 %.2f), %.0f triangles/frame,\n"
                 "  split query %.2f / io %.2f / decode %.2f / render %.2f ms, %.1f MiB read, peak resident %.1f MiB%s\n"
                 "  wrote %s.csv and %s.json\n",
@@ -42,9 +39,47 @@ void register_walk(CLI::App& root) {
                 summary.frames ? double(summary.total_triangles) / summary.frames : 0.0, summary.mean_query_ms,
                 summary.mean_io_ms, summary.mean_decode_ms, summary.mean_render_ms,
                 summary.total_bytes_read / 1048576.0, summary.peak_resident_bytes / 1048576.0,
-                options.memory_budget_bytes ? (" (budget " + std::to_string(options.memory_budget_bytes >> 20) + " MiB)").c_str() : "",
-                stem.c_str(),
-                stem.c_str());
+                summary.budget_bytes ? (" (budget " + bench::fixed(summary.budget_bytes / 1048576.0, 1) + " MiB)").c_str() : "",
+                stem.c_str(), stem.c_str());
+  return summary;
+}
+
+// The strategies side by side, each frame time also as a speed-up over the first strategy's.
+std::string comparison_table(const std::vector<WalkSummary>& runs) {
+  bench::Table rows;
+  for (const WalkSummary& s : runs)
+    rows.push_back({s.strategy, bench::fixed(s.mean_ms, 1), bench::fixed(s.stddev_ms, 1), bench::fixed(s.p95_ms, 1),
+                    bench::fixed(s.mean_ms > 0 ? runs.front().mean_ms / s.mean_ms : 0.0, 2) + "×",
+                    bench::fixed(s.frames ? double(s.total_triangles) / s.frames : 0.0, 0),
+                    bench::fixed(s.total_bytes_read / 1048576.0, 1), bench::fixed(s.peak_resident_bytes / 1048576.0, 1),
+                    std::to_string(s.stalls)});
+  return bench::md_table({"strategy", "frame ms mean", "sd", "p95", "speed-up vs " + runs.front().strategy,
+                          "triangles/frame", "MiB read", "peak resident MiB", "stalls"},
+                         rows);
+}
+
+}  // namespace
+
+void register_walk(CLI::App& root) {
+  auto* cmd = root.add_subcommand("walk", "Replay a camera path with one strategy or several and measure every frame");
+  auto args = std::make_shared<ReplayOptions>();
+  args->add_to(*cmd, "out/walk");
+  cmd->callback([args] {
+    World world(args->world);
+    CameraPath path = read_path(args->path);
+    args->make_output_folder();
+    auto context = GlContext::headless();
+    std::vector<WalkSummary> runs;
+    for (const std::string& name : args->strategies) runs.push_back(walk_one(*args, world, path, name));
+    if (args->json) {
+      nlohmann::ordered_json all = nlohmann::ordered_json::array();
+      for (const WalkSummary& s : runs) all.push_back(nlohmann::ordered_json::parse(to_json(s)));
+      std::printf("%s\n", (runs.size() == 1 ? all.front() : all).dump(2).c_str());
+    }
+    if (runs.size() < 2) return;
+    const std::string table = comparison_table(runs);
+    write_file_atomically(args->out + "/walk.md", table);
+    if (!args->json) std::printf("\n%s\nwrote %s/walk.md\n", table.c_str(), args->out.c_str());
   });
 }
 

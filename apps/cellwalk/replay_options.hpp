@@ -5,6 +5,8 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <string>
+#include <vector>
 
 #include "cellwalk/error.hpp"
 
@@ -14,7 +16,8 @@
 namespace cellwalk::app {
 
 struct ReplayOptions {
-  std::string world, path, strategy = "brute", out;
+  std::string world, path, out;
+  std::vector<std::string> strategies{"brute"};  // several: run one after another, side by side
   double budget_mib = 0;
   double eta = 0.001;
   uint64_t polygon_budget = 20000;
@@ -26,7 +29,12 @@ struct ReplayOptions {
     out = default_out;
     cmd.add_option("world", world, "World file (.cww) from cellwalk build")->required();
     cmd.add_option("--path", path, "Camera path file (cellwalk path)")->required();
-    cmd.add_option("--strategy", strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
+    cmd.add_option("--strategy", strategies,
+                   "Strategy: " + CLI::detail::join(strategy_names()) +
+                       "; repeat to run several on the same path and compare them in one table")
+        ->expected(1)
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+        ->capture_default_str();
     cmd.add_option("-o,--output", out, "Output folder")->capture_default_str();
     cmd.add_option("--budget", budget_mib, "Memory budget for the strategy, MiB (0 = none); never exceeded")
         ->capture_default_str()

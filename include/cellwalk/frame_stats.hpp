@@ -34,6 +34,7 @@ struct WalkSummary {
   uint64_t stalls = 0;
   uint64_t peak_resident_bytes = 0;  // the strategy's exact peak (set by the caller), or the
                                      // largest per-frame value
+  uint64_t budget_bytes = 0;         // the memory budget the walk ran under (0: none)
   uint64_t peak_gpu_bytes = 0;
 };
 

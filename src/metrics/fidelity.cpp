@@ -70,7 +70,7 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
       const std::string stem = options.image_dir + "/frame" + std::to_string(i);
       write_png(truth_color, stem + "-truth.png");
       write_png(test_color, stem + "-" + strategy.name() + ".png");
-      write_png(diff, stem + "-diff.png");
+      write_png(diff, stem + "-" + strategy.name() + "-diff.png");
       ++images;
     }
     if (progress) progress(i + 1, path.frames.size());

@@ -87,6 +87,7 @@ std::string to_json(const WalkSummary& s) {
       {"cache_misses", s.cache_misses},
       {"stalls", s.stalls},
       {"peak_resident_bytes", s.peak_resident_bytes},
+      {"budget_bytes", s.budget_bytes},
       {"peak_gpu_bytes", s.peak_gpu_bytes}};
   return j.dump(2);
 }
