@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <map>
 
 #include "cellwalk/error.hpp"
 #include "cellwalk/hdov_tree.hpp"
@@ -177,7 +179,7 @@ TEST_F(HdovTreeTest, LargerEtaDrawsInternalLodsWithFewerTrianglesAndSameInEveryS
 }
 
 TEST_F(HdovTreeTest, FlipsAndSeeksOrderTheSchemesAsSection54Says) {
-  HdovCounters h, v, iv;
+  HdovCounters h, v;
   for (CellId c = 0; c < tree_->cell_count(); ++c) {
     HdovCounters a, b, d;
     search(VPageScheme::kHorizontal, c, 0.0, &a);
@@ -194,7 +196,8 @@ TEST_F(HdovTreeTest, FlipsAndSeeksOrderTheSchemesAsSection54Says) {
 }
 
 TEST_F(HdovTreeTest, NodeCachesHitOnRepeatedQueriesUnderEveryPolicy) {
-  for (auto policy : {HdovCacheOptions::Policy::kLru, HdovCacheOptions::Policy::kDov, HdovCacheOptions::Policy::kDovTime}) {
+  for (auto policy : {HdovCacheOptions::Policy::kLru, HdovCacheOptions::Policy::kDov, HdovCacheOptions::Policy::kDovTime,
+                      HdovCacheOptions::Policy::kDovTimeAccess}) {
     HdovSearcher s(*tree_, VPageScheme::kIndexedVertical, {.policy = policy, .pages = tree_->node_count()});
     HdovCounters io;
     std::vector<HdovPick> out;
@@ -208,6 +211,67 @@ TEST_F(HdovTreeTest, NodeCachesHitOnRepeatedQueriesUnderEveryPolicy) {
     small.flip(0, io);
     small.search({}, out, io);
     EXPECT_LE(small.cache_counters().hits + small.cache_counters().misses, io.node_visits);
+  }
+}
+
+// DoV-Time with T in queries (§5.7, digest §3.11): within one query recency does not count, so
+// the smaller DoV goes first; counted in accesses, 20 later requests outweigh a DoV gap of 0.009.
+TEST(HdovDovTime, TimeAdvancesOncePerQueryNotPerAccess) {
+  auto run = [](DovTimeClock clock) {
+    auto policy = make_dov_time_policy(0.001, clock);
+    policy->on_query({});
+    policy->on_insert(1, {.dov = 0.01f});
+    for (CacheKey k = 10; k < 30; ++k) policy->on_insert(k, {.dov = 0.5f});
+    policy->on_insert(2, {.dov = 0.001f});
+    return policy;
+  };
+  const auto per_query = run(DovTimeClock::kQueries);
+  const auto per_access = run(DovTimeClock::kAccesses);
+  EXPECT_EQ(per_query->victim(), CacheKey(2));   // 0.001 + κ·1 < 0.01 + κ·1
+  EXPECT_EQ(per_access->victim(), CacheKey(1));  // 0.01 + κ·1 < 0.001 + κ·22
+  // Twenty queries later key 2 is touched again: now its T is 21 queries ahead of key 1's.
+  for (int q = 0; q < 20; ++q) per_query->on_query({});
+  per_query->on_access(2, {.dov = 0.001f});
+  EXPECT_EQ(per_query->victim(), CacheKey(1));  // 0.01 + κ·1 < 0.001 + κ·21
+}
+
+// Random inserts, hits, erases and query ticks against a brute-force DoV + κ·T (T in queries).
+TEST(HdovDovTime, PerQueryClockMatchesBruteForceOracle) {
+  struct Item {
+    float dov;
+    uint64_t query, access;
+  };
+  constexpr double kKappa = 0.001;
+  for (uint64_t seed = 1; seed <= 3; ++seed) {
+    auto policy = make_dov_time_policy(kKappa, DovTimeClock::kQueries);
+    std::map<CacheKey, Item> oracle;
+    Random rng(seed);
+    uint64_t query = 0, access = 0;
+    for (int step = 0; step < 3000; ++step) {
+      const CacheKey key = CacheKey(rng.integer(0, 40));
+      const int op = rng.integer(0, 99);
+      const auto dov = float(rng.integer(0, 20)) * 0.0005f;  // ties happen
+      if (op < 10) {
+        policy->on_query({});
+        ++query;
+      } else if (!oracle.count(key)) {
+        policy->on_insert(key, {.dov = dov});
+        oracle[key] = {dov, query, ++access};
+      } else if (op < 80) {
+        policy->on_access(key, {.dov = dov});
+        oracle[key] = {dov, query, ++access};
+      } else {
+        policy->on_erase(key);
+        oracle.erase(key);
+      }
+      std::optional<CacheKey> expect;
+      std::pair<double, uint64_t> best{0, 0};
+      for (const auto& [k, it] : oracle) {
+        const std::pair<double, uint64_t> score{double(it.dov) + kKappa * double(it.query), it.access};
+        if (!expect || score < best) expect = k, best = score;
+      }
+      ASSERT_EQ(policy->victim(), expect) << "seed " << seed << " step " << step;
+    }
   }
 }
 

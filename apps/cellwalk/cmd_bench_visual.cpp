@@ -10,7 +10,7 @@
 namespace cellwalk::app {
 
 void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
-  auto* cmd = bench.add_subcommand("visual", "VISUAL (HDoV thesis ch. 5): Table 5.2, Exps. 1-3 -> <out>/visual.md");
+  auto* cmd = bench.add_subcommand("visual", "VISUAL (HDoV thesis ch. 5): Table 5.2, Exps. 1-3, Fig. 5.23 -> <out>/visual.md");
   struct Args {
     VisualBenchParams params;
     bool json = false;
@@ -23,6 +23,13 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--fanout", p.fanout, "HDoV-tree fan-out M")->capture_default_str()->check(CLI::Range(4, 140));
   cmd->add_option("--queries", p.queries, "Queries per Exp. 1/2 run")->capture_default_str()->check(CLI::Range(1, 1000000));
   cmd->add_option("--frames", p.frames, "Frames of the Exp. 3 session")->capture_default_str()->check(CLI::Range(2, 100000));
+  cmd->add_option("--walk-cell-size", p.walk_cell_size, "Exp. 3: side of the view cells along the path, m")->capture_default_str()->check(CLI::Range(0.5, 1000.0));
+  cmd->add_option("--fidelity-every", p.fidelity_every, "Exp. 3: compare every k-th frame with ground truth")->capture_default_str()->check(CLI::Range(1, 100000));
+  cmd->add_option("--width", p.width, "Exp. 3 fidelity image width")->capture_default_str()->check(CLI::Range(16, 4096));
+  cmd->add_option("--height", p.height, "Exp. 3 fidelity image height")->capture_default_str()->check(CLI::Range(16, 4096));
+  cmd->add_option("--scale-objects", p.scale_objects, "Fig. 5.23: objects of the cities besides --objects")->capture_default_str()->check(CLI::Range(uint64_t(50), uint64_t(1000000)));
+  cmd->add_option("--scale-cells", p.scale_cells_per_side, "Fig. 5.23: cells per side of each city's central block")->capture_default_str()->check(CLI::Range(1, 64));
+  cmd->add_option("--scale-eta", p.scale_eta, "Fig. 5.23: η of the searches")->capture_default_str()->check(CLI::Range(0.0, 1.0));
   cmd->add_option("--render-rate", p.render_mtri_per_s, "Modelled rendering rate, M triangles/s")->capture_default_str()->check(CLI::PositiveNumber);
   cmd->add_option("--cache-pages", p.cache_pages, "Node cache sizes of Exp. 1, pages")->capture_default_str();
   cmd->add_option("--etas", p.etas, "η values of Exp. 2")->capture_default_str();

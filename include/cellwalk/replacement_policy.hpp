@@ -83,8 +83,13 @@ std::unique_ptr<ReplacementPolicy> make_distance_priority_lru_policy(
 
 // Evicts the lowest DoV (§3.11 "DoV policy").
 std::unique_ptr<ReplacementPolicy> make_dov_policy();
-// Evicts the lowest DoV + κ·T, T = the entry's last access time in accesses (§3.11 "DoV-Time").
-std::unique_ptr<ReplacementPolicy> make_dov_time_policy(double kappa = 0.001);
+// What DoV-Time's T counts (§3.11 leaves the time unit open): requests to the cache, or
+// queries (on_query() calls; the thesis's node cache ages once per HDoV-tree search).
+enum class DovTimeClock { kAccesses, kQueries };
+// Evicts the lowest DoV + κ·T, T = the entry's last access time on `clock` (§3.11 "DoV-Time");
+// ties go to the least recently accessed entry.
+std::unique_ptr<ReplacementPolicy> make_dov_time_policy(double kappa = 0.001,
+                                                        DovTimeClock clock = DovTimeClock::kAccesses);
 // LRU across frames, lowest relevance first within the least recently used frame (seeds/003).
 std::unique_ptr<ReplacementPolicy> make_hybrid_relevance_policy();
 

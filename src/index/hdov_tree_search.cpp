@@ -32,7 +32,8 @@ uint32_t nearest(uint32_t count, double target, Triangles triangles) {
 std::unique_ptr<ReplacementPolicy> make_policy(const HdovCacheOptions& o) {
   switch (o.policy) {
     case HdovCacheOptions::Policy::kDov: return make_dov_policy();
-    case HdovCacheOptions::Policy::kDovTime: return make_dov_time_policy(o.kappa);
+    case HdovCacheOptions::Policy::kDovTime: return make_dov_time_policy(o.kappa, DovTimeClock::kQueries);
+    case HdovCacheOptions::Policy::kDovTimeAccess: return make_dov_time_policy(o.kappa, DovTimeClock::kAccesses);
     default: return make_lru_policy();
   }
 }
@@ -51,7 +52,8 @@ HdovCacheOptions::Policy parse_hdov_cache_policy(const std::string& name) {
   if (name == "lru") return HdovCacheOptions::Policy::kLru;
   if (name == "dov") return HdovCacheOptions::Policy::kDov;
   if (name == "dt" || name == "dov-time") return HdovCacheOptions::Policy::kDovTime;
-  fail("cache policy \"" + name + "\"", "unknown; choose none, lru, dov or dt");
+  if (name == "dt-access") return HdovCacheOptions::Policy::kDovTimeAccess;
+  fail("cache policy \"" + name + "\"", "unknown; choose none, lru, dov, dt or dt-access");
 }
 
 const char* hdov_cache_policy_name(HdovCacheOptions::Policy policy) {
@@ -60,6 +62,7 @@ const char* hdov_cache_policy_name(HdovCacheOptions::Policy policy) {
     case HdovCacheOptions::Policy::kLru: return "lru";
     case HdovCacheOptions::Policy::kDov: return "dov";
     case HdovCacheOptions::Policy::kDovTime: return "dt";
+    case HdovCacheOptions::Policy::kDovTimeAccess: return "dt-access";
   }
   return "?";
 }
@@ -204,6 +207,7 @@ void HdovSearcher::flip(CellId cell, HdovCounters& counters) {
 void HdovSearcher::search(const HdovSearchParams& params, std::vector<HdovPick>& out, HdovCounters& counters) {
   if (!cell_) fail("HDoV search", "no cell: flip() first");
   impl_->last_end = UINT64_MAX;  // a search's first V-page read is a seek
+  if (impl_->buffer) impl_->buffer->begin_query({});  // DoV-Time's clock: one tick per search
   const std::shared_ptr<const HdovNode> root = impl_->node(0, 1.0f, counters);
   const auto vd = impl_->vpage(0, static_cast<uint32_t>(root->entries.size()), counters);
   if (vd) impl_->visit(*root, *vd, params, out, counters);

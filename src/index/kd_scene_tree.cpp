@@ -45,11 +45,11 @@ namespace {
 
 // Reads and checks the node table: every index in range, children after their parent, each
 // object in exactly one leaf, leaf counts and boxes consistent.
-std::vector<KdNode> read_nodes(const std::vector<uint8_t>& bytes, const std::string& where, const World& world,
-                               size_t level_table_size) {
+std::vector<KdNode> read_nodes(const std::vector<uint8_t>& bytes, const std::string& where,
+                               std::span<const uint32_t> lod_counts, size_t level_table_size) {
   ByteReader in(bytes, where + ": section " + kd_format::kNodes);
   const uint32_t count = in.get<uint32_t>("node count");
-  const size_t objects = world.object_count();
+  const size_t objects = lod_counts.size();
   if (objects == 0 || count != 2 * objects - 1) in.error("node count " + std::to_string(count) + " does not fit " + std::to_string(objects) + " objects");
   if (count > in.remaining() / kd_format::kNodeRecordBytes) in.error("node count " + std::to_string(count) + " past the end");
   std::vector<KdNode> nodes(count);
@@ -71,7 +71,7 @@ std::vector<KdNode> read_nodes(const std::vector<uint8_t>& bytes, const std::str
     if (n.is_leaf()) {
       if (n.object >= objects || seen[n.object]++) in.error(node + "bad or repeated object");
       if (n.child[0] != kNoNode || n.child[1] != kNoNode || n.leaf_count != 1 ||
-          n.level_count != world.object(n.object).lod_count)
+          n.level_count != lod_counts[n.object])
         in.error(node + "inconsistent leaf");
     } else {
       for (NodeIndex c : n.child)
@@ -109,6 +109,15 @@ std::vector<AggregateLevel> read_levels(const std::vector<uint8_t>& bytes, const
 
 }  // namespace
 
+kd_format::Tables kd_format::read_tables(const std::vector<uint8_t>& nodes, const std::vector<uint8_t>& levels,
+                                         uint64_t geometry_bytes, std::span<const uint32_t> lod_counts,
+                                         const std::string& where) {
+  Tables t;
+  t.levels = read_levels(levels, where, geometry_bytes);
+  t.nodes = read_nodes(nodes, where, lod_counts, t.levels.size());
+  return t;
+}
+
 KdSceneTree::KdSceneTree(const World& world, const std::string& path)
     : world_(world), file_(std::make_unique<WorldFile>(path, WorldFile::Options{})) {
   const std::string again = " (delete it to have it rebuilt)";
@@ -127,8 +136,12 @@ KdSceneTree::KdSceneTree(const World& world, const std::string& path)
   params_.lods.min_triangles = j.value("lod_min_triangles", size_t(0));
   params_.lods.simplifier = AggregateSimplifier(j.value("lod_simplifier", 0) == 1 ? 1 : 0);
   const uint64_t geometry_bytes = file_->section(kd_format::kGeometry).bytes;
-  levels_ = read_levels(file_->read_all(kd_format::kLevels), path, geometry_bytes);
-  nodes_ = read_nodes(file_->read_all(kd_format::kNodes), path, world, levels_.size());
+  std::vector<uint32_t> lod_counts(world.object_count());
+  for (ObjectId o = 0; o < lod_counts.size(); ++o) lod_counts[o] = world.object(o).lod_count;
+  kd_format::Tables tables = kd_format::read_tables(file_->read_all(kd_format::kNodes), file_->read_all(kd_format::kLevels),
+                                                    geometry_bytes, lod_counts, path);
+  levels_ = std::move(tables.levels);
+  nodes_ = std::move(tables.nodes);
   leaf_of_.reserve(world.object_count());
   for (NodeIndex i = static_cast<NodeIndex>(nodes_.size()); i-- > 0;) {
     KdNode& n = nodes_[i];

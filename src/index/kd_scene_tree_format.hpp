@@ -4,7 +4,9 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <string>
+#include <vector>
 
 #include "cellwalk/hdov_scene_tree.hpp"
 
@@ -18,6 +20,17 @@ inline constexpr const char* kLevels = "kd-levels";      // u32 count, then kLev
 inline constexpr const char* kGeometry = "kd-geometry";  // encoded aggregate levels
 constexpr size_t kNodeRecordBytes = 6 * 4 + 7 * 4;
 constexpr size_t kLevelRecordBytes = 8 + 4 + 4;
+
+// The node and level tables decoded from their sections' bytes and checked (indices in range,
+// children after parents, each object in exactly one leaf with its world level count, levels
+// inside the geometry section); lod_counts[o] is object o's level count. Throws Error naming
+// `where` on damage. The reader's core, also driven by fuzz/kd_tree_fuzz.cpp.
+struct Tables {
+  std::vector<KdNode> nodes;
+  std::vector<AggregateLevel> levels;
+};
+Tables read_tables(const std::vector<uint8_t>& nodes, const std::vector<uint8_t>& levels, uint64_t geometry_bytes,
+                   std::span<const uint32_t> lod_counts, const std::string& where);
 
 // XXH3-64 of the world's "objects" and "lods" sections: a tree file belongs to one world.
 uint64_t world_identity(const World& world);

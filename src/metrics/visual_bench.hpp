@@ -2,8 +2,9 @@
 // city, side by side in one run: Table 5.2 (storage of the three V-page schemes), Exp. 1 (node
 // cache hit rate vs cache size for LRU, DoV and DoV-Time, continuous and random queries),
 // Exp. 2 (search time and light-weight page I/O vs η for the schemes and the naive method),
-// Exp. 3 (walkthrough frame time mean and variance vs η against REVIEW, peak memory).
-// Writes <out>/visual.md and <out>/visual/*.csv, *.svg.
+// Exp. 3 (walkthrough frame time mean and variance vs η against REVIEW, peak memory, fidelity per
+// η through the compare harness), Fig. 5.23 (search time and I/O vs world size) and a reading
+// against the thesis's numbers. Writes <out>/visual.md and <out>/visual/*.csv, *.svg.
 #pragma once
 
 #include <cstdint>
@@ -19,9 +20,15 @@ struct VisualBenchParams {
   int dov_resolution = 32;            // cube-map face resolution of the DoV engine (thesis: 256)
   uint32_t fanout = 8;                // M
   int queries = 400;                  // per Exp. 1 / Exp. 2 configuration
-  int frames = 600;                   // Exp. 3 path
+  int frames = 600;                   // Exp. 3 path ("normal" session at 10 fps: ~120 m)
+  float walk_cell_size = 5.0f;        // Exp. 3: view cells along the path (many cell changes)
+  int fidelity_every = 20;            // Exp. 3: compare every k-th frame against ground truth
+  int width = 640, height = 480;      // Exp. 3 fidelity images
+  std::vector<uint64_t> scale_objects = {375, 750, 3000};  // Fig. 5.23: cities besides the default one
+  int scale_cells_per_side = 3;       // Fig. 5.23: a central block of cells of the default size
+  double scale_eta = 0.001;           // Fig. 5.23's η
   double render_mtri_per_s = 4.0;     // modelled rendering rate (llvmpipe, docs/renderer.md)
-  std::vector<double> cache_pages = {2, 4, 8, 16, 32, 64, 128};
+  std::vector<double> cache_pages = {2, 4, 8, 16, 32, 64, 128, 256};
   std::vector<double> etas = {0, 0.0005, 0.001, 0.002, 0.004, 0.008};
   std::vector<double> walk_etas = {0, 0.0003, 0.001, 0.004};
   uint64_t seed = 1;
