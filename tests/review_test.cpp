@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <limits>
 #include <optional>
 #include <set>
 
@@ -263,6 +264,43 @@ CameraPath down_the_street(double speed, int frames) {
   CameraPath path;
   for (int i = 0; i < frames; ++i) path.frames.push_back({0.1 * i, Vec3(float(speed * 0.1 * i), 1.7f, 0.0f), -90.0f, 0.0f});
   return path;
+}
+
+// Squared distance from a point to a box (0 inside).
+float box_distance2(const Aabb& b, const Vec3& p) {
+  const Vec3 d = glm::max(glm::max(b.min - p, p - b.max), Vec3(0.0f));
+  return glm::dot(d, d);
+}
+
+// A disk cell whose objects do not all fit the object buffer: what is fetched is the part nearest
+// the viewer, so every object in view that is not drawn is at least as far as every one drawn.
+// (Fetched in search order, the dropped objects were scattered over the whole cell.)
+TEST(ReviewStrategy, ADiskCellLargerThanTheBufferKeepsTheObjectsNearestTheViewer) {
+  test::TempDir dir;
+  const World world(street_world_with_rtree(dir));
+  for (const std::string name : {"review-np:depth=200,buffer=0.02", "review-box:depth=200,buffer=0.02"}) {
+    ReviewStrategy s(world, parse_review_strategy_name(name), StrategyOptions{});
+    Camera camera = review_lens();
+    apply(down_the_street(10.0, 1).frames.front(), camera);
+    std::vector<DrawItem> items;
+    FrameStats stats;
+    s.select(camera, items, stats);
+    ASSERT_EQ(s.queries().size(), 1u) << name;
+    ASSERT_GT(s.queries().front().dropped, 0u) << name << ": the buffer must be too small for the cell";
+    std::set<ObjectId> drawn;
+    for (const DrawItem& item : items) drawn.insert(item.object);
+    const ConvexCell h = review::frustum_cell(camera, float(s.config().depth));
+    float farthest_drawn = 0.0f, nearest_missing = std::numeric_limits<float>::max();
+    for (ObjectId id = 0; id < world.object_count(); ++id) {
+      const Aabb& b = world.object(id).bounds;
+      const float d = box_distance2(b, camera.position);
+      if (drawn.contains(id)) farthest_drawn = std::max(farthest_drawn, d);
+      else if (sat_overlap(h.corners, corners({b.min + 0.01f, b.max - 0.01f}))) nearest_missing = std::min(nearest_missing, d);
+    }
+    ASSERT_FALSE(drawn.empty()) << name;
+    ASSERT_LT(nearest_missing, std::numeric_limits<float>::max()) << name << ": something in view must be missing";
+    EXPECT_LE(farthest_drawn, nearest_missing) << name;
+  }
 }
 
 // Heap bytes in use in every arena (glibc's count, including the allocator's block headers), or

@@ -64,6 +64,23 @@ void add_fetch(ReviewQuery& q, const FetchCounters& f) {
   q.decode_ms += f.decode_ms;
 }
 
+// Fetch order of a query's results: nearest the viewpoint first (squared distance from `eye` to
+// each object's box, ties by id). The thesis fetches in search order; when a result does not fit
+// the budget the rest is dropped, and dropping the farthest objects costs the picture least
+// (docs/review.md, "Under a budget").
+void nearest_first(const World& world, const Vec3& eye, std::vector<uint32_t>& ids) {
+  auto distance2 = [&](uint32_t id) {
+    const Aabb& b = world.object(id).bounds;
+    const Vec3 d = glm::max(glm::max(b.min - eye, eye - b.max), Vec3(0.0f));
+    return glm::dot(d, d);
+  };
+  // Sorted in place, distances recomputed: no transient the budget would have to charge.
+  std::sort(ids.begin(), ids.end(), [&](uint32_t a, uint32_t b) {
+    const float da = distance2(a), db = distance2(b);
+    return da < db || (da == db && a < b);
+  });
+}
+
 }  // namespace
 
 struct ReviewStrategy::Impl {
@@ -250,9 +267,11 @@ void ReviewStrategy::Impl::demand_query(const Aabb& cell, FrameStats& stats) {
   q.node_reads = sc.node_reads;
   q.results = ids.size();
   if (observer) observer(q, ids);
+  nearest_first(world, last_position.value_or(cell.center()), ids);
   buffer.begin_group(cell);
   FetchCounters fc;
-  for (uint32_t id : ids) {
+  for (size_t i = 0; i < ids.size(); ++i) {
+    const uint32_t id = ids[i];
     if (buffer.contains(id)) {  // left by an incomplete query: not fetched again
       ++q.already_buffered;
       continue;
@@ -264,9 +283,9 @@ void ReviewStrategy::Impl::demand_query(const Aabb& cell, FrameStats& stats) {
       drop_prefetch();
       o = review::fetch_object(world, id, buffer.budget(), fc);
     }
-    if (!o) {
-      ++q.dropped;
-      continue;
+    if (!o) {  // the rest is farther (nearest_first): dropped, so the buffer holds a nearest prefix
+      q.dropped = ids.size() - i;
+      break;
     }
     buffer.insert(std::move(*o));
   }
@@ -309,7 +328,8 @@ void ReviewStrategy::Impl::start_prefetch(const Camera& camera, const Aabb& frus
   PrefetchRequest request;
   request.key = next->key;
   request.epoch = frame;
-  request.loader = [this, cell, predicted, history, buffered, at_frame]() mutable -> LoadedItem {
+  const Vec3 eye = camera.position + velocity * float(config.k);  // where the viewer is expected
+  request.loader = [this, cell, predicted, eye, history, buffered, at_frame]() mutable -> LoadedItem {
     auto payload = std::make_shared<PrefetchedCell::Payload>();
     ReviewQuery& q = payload->query;
     q.frame = at_frame;
@@ -326,6 +346,7 @@ void ReviewStrategy::Impl::start_prefetch(const Camera& camera, const Aabb& frus
     q.node_reads = sc.node_reads;
     q.results = ids.size();
     if (observer) observer(q, ids);
+    nearest_first(world, eye, ids);
     FetchCounters fc;
     for (size_t i = 0; i < ids.size(); ++i) {
       if (std::binary_search(buffered->begin(), buffered->end(), ids[i])) {
