@@ -302,6 +302,10 @@ TEST_F(HdovTreeTest, VisualStrategyDrawsTheSearchResultWithinItsBudget) {
   EXPECT_FALSE(items.empty());
   for (const DrawItem& item : items) EXPECT_NE(s->mesh(item, stats), nullptr);
   EXPECT_LE(s->peak_resident_bytes(), options.memory_budget_bytes);
+  // Settings that change what is drawn tell two runs apart in a side-by-side table.
+  auto full = make_strategy("visual:eta=0.001,scheme=v,cache=8,policy=dov,maxdov=0.000000001,tree=" + path_,
+                            *world_, options);
+  EXPECT_NE(s->name(), full->name());
   EXPECT_THROW(make_strategy("visual:scheme=diagonal", *world_, options), Error);
   EXPECT_THROW(make_strategy("visual:eta=2", *world_, options), Error);
 }

@@ -174,7 +174,7 @@ std::string report(const VisibilityBenchParams& p, const Json& machine, const st
         "\n";
   md += "## Storage (conservative sets of a " + std::to_string(p.storage_side) + " × " +
         std::to_string(p.storage_side) + " block of neighbouring cells)\n\n" +
-        bench::md_table({"world", "cells", "ids per set", "bitmask B", "gap-coded B", "stored B (full or Δ)",
+        bench::md_table({"world", "cells", "ids per set", "bitmask B", "gap-coded B", "stored B (gaps, Δ or bitmask)",
                          "stored / bitmask", "Δ per shared face B"},
                         storage) +
         "\n";

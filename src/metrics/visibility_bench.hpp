@@ -4,8 +4,9 @@
 //             and dov against rendered ground truth, on 2D grid cells at eye height of the
 //             generated city and plant at ~10^6 triangles (and ~10^7 with --large);
 //   refine    the conservative engine at each refinement level (0 = no refinement), same cells;
-//   storage   the conservative sets of a block of neighbouring cells, gap-coded, stored (full or
-//             Δ from a neighbour, as `cellwalk pvs` writes them) and as plain bitmasks;
+//   storage   the conservative sets of a block of neighbouring cells, gap-coded, stored (the
+//             smallest of gaps, Δ from a neighbour or bitmask, as `cellwalk pvs` writes them) and
+//             as plain bitmasks;
 //   target    conservative sets for a block of cells on `threads` threads, cells per second, and
 //             the time for 4,096 cells: measured on a 64 × 64 block of the 10^7-triangle city
 //             with --large, else extrapolated from the storage block (the target:

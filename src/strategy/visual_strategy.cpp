@@ -3,6 +3,7 @@
 // search; draw the picks (objects at eq. 5.6's level, internal LODs at eq. 5.5's); the delta
 // search reads only models not already buffered (the geometry caches' hits).
 #include <filesystem>
+#include <sstream>
 
 #include "cellwalk/error.hpp"
 #include "cellwalk/geometry_store.hpp"
@@ -97,8 +98,11 @@ VisualStrategy::~VisualStrategy() = default;
 
 std::string VisualStrategy::name() const {
   const Impl& m = *impl_;
-  return "visual:eta=" + std::to_string(m.eta) + ",scheme=" + vpage_scheme_name(m.config.scheme) +
-         ",policy=" + hdov_cache_policy_name(m.config.cache.policy);
+  // Every setting that changes what is drawn is in the name, so two runs in one table differ.
+  std::ostringstream maxdov;
+  maxdov << m.config.max_dov;
+  return "visual:eta=" + std::to_string(m.eta) + ",maxdov=" + maxdov.str() +
+         ",scheme=" + vpage_scheme_name(m.config.scheme) + ",policy=" + hdov_cache_policy_name(m.config.cache.policy);
 }
 
 void VisualStrategy::select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) {
