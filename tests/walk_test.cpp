@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <nlohmann/json.hpp>
 
@@ -178,14 +179,48 @@ TEST(WalkCommand, SeveralStrategiesSideBySide) {
   EXPECT_NE(second.find("| ground-truth | "), std::string::npos) << second;
 
   r = test::run_cellwalk("compare " + world + " --path " + dir.file("p.txt") +
-                         " --strategy brute --strategy conv --every 5 --width 96 --height 64 -o " + dir.file("cmp"));
+                         " --strategy brute --strategy conv --every 5 --width 96 --height 64 --json -o " + dir.file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto fidelities = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  ASSERT_EQ(fidelities.size(), 2u);
+  EXPECT_EQ(fidelities[1]["strategy"], "conv");
   std::ifstream fidelity(dir.file("cmp/compare.md"));
   std::string line;
   int perfect = 0;
   while (std::getline(fidelity, line))
     if (line.find(" 0 of ") != std::string::npos && line.find("inf (identical)") != std::string::npos) ++perfect;
   EXPECT_EQ(perfect, 2) << r.output;
+}
+
+// Two runs never share files or a row: REVIEW's name leaves its settings out, so two REVIEWs
+// are labelled by the text given; the same text twice is refused before anything runs.
+TEST(WalkCommand, RunsWithTheSameNameAreToldApart) {
+  test::TempDir dir;
+  const std::string world = dir.file("city.cww");  // built by the command, so it has an R-tree
+  auto r = test::run_cellwalk("generate city --objects 40 --seed 2 -o " + dir.file("city.cwscene"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("build " + dir.file("city.cwscene") + " -o " + world);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("path " + world + " --frames 10 -o " + dir.file("p.txt"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") +
+                         " --strategy review:depth=60 --strategy review:depth=80 --width 96 --height 64 -o " + dir.file("out"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/review:depth=60.csv")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/review:depth=80.csv")));
+  std::ifstream table(dir.file("out/walk.md"));
+  const std::string text((std::istreambuf_iterator<char>(table)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("| review:depth=80 |"), std::string::npos) << text;
+
+  r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") +
+                         " --strategy brute --strategy conv --strategy brute --width 96 --height 64 -o " + dir.file("twice"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--strategy brute: given twice"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("twice/brute.csv"))) << "refused before any run";
+  r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") +
+                         " --strategy brute --strategy nonsense --width 96 --height 64 -o " + dir.file("bad"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad/brute.csv"))) << "a bad name fails before any run";
 }
 
 // The hard budget end to end: a walk given a budget well below the world's geometry reports
@@ -213,6 +248,12 @@ TEST(WalkCommand, BudgetFarBelowTheWorldHoldsInTheSummary) {
   EXPECT_NEAR(double(reported), double(budget), 1024.0);
   EXPECT_GT(json["peak_resident_bytes"].get<uint64_t>(), 0u);
   EXPECT_LE(json["peak_resident_bytes"].get<uint64_t>(), reported);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/walk.md"))) << "one strategy gets its table too";
+  // The budget binds: the same walk without one holds more than it.
+  r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") + " --width 96 --height 64 -o " + dir.file("free"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto free = nlohmann::json::parse(std::ifstream(dir.file("free/brute.json")));
+  EXPECT_GT(free["peak_resident_bytes"].get<uint64_t>(), budget);
 }
 
 TEST(WalkCommand, BadPathFileGivesOneClearLine) {

@@ -23,30 +23,39 @@ struct NamedFidelity {
   FidelitySummary summary;
 };
 
+// The summary as JSON, led by the run's label.
+nlohmann::ordered_json labelled_json(const std::string& label, const FidelitySummary& summary) {
+  nlohmann::ordered_json one = {{"strategy", label}};
+  one.update(nlohmann::ordered_json::parse(to_json(summary)));
+  return one;
+}
+
 std::string psnr_text(double db) { return std::isfinite(db) ? bench::fixed(db, 1) : "inf (identical)"; }
 
-NamedFidelity compare_one(const CompareArgs& args, const World& world, const CameraPath& path, const std::string& name) {
+NamedFidelity compare_one(const CompareArgs& args, const World& world, const CameraPath& path, const std::string& name,
+                          const std::string& label) {
   auto strategy = make_strategy(name, world, args.strategy_options());
   auto truth = make_strategy("ground-truth", world, {});
   Renderer renderer(args.lens.render_settings());
   CompareOptions options = args.options;
   options.image_dir = options.max_images > 0 ? args.out : "";
-  Progress progress("compare " + name, path.frames.size());
+  options.label = label;
+  Progress progress("compare " + label, path.frames.size());
   auto frames = compare(path, args.lens.lens(), *strategy, *truth, renderer, options,
                         [&](size_t done, size_t) { progress.update(done); });
   progress.finish();
   const FidelitySummary summary = summarize(frames);
-  const std::string stem = args.out + "/" + strategy->name() + "-fidelity";
+  const std::string stem = args.out + "/" + label + "-fidelity";
   write_fidelity_csv(frames, stem + ".csv");
-  write_file_atomically(stem + ".json", to_json(summary) + "\n");
+  write_file_atomically(stem + ".json", labelled_json(label, summary).dump(2) + "\n");
   if (!args.json)
     std::printf("compare %s: %zu frames, differing pixels mean %.4f%% (max %.4f%%), PSNR %s dB,\n"
                 "  visible objects missed %llu of %llu (recall %.4f); wrote %s.csv\n",
-                strategy->name().c_str(), summary.frames, 100 * summary.mean_differing_fraction,
+                label.c_str(), summary.frames, 100 * summary.mean_differing_fraction,
                 100 * summary.max_differing_fraction, psnr_text(summary.mean_psnr_db).c_str(),
                 (unsigned long long)summary.missed_objects, (unsigned long long)summary.visible_objects,
                 summary.recall, stem.c_str());
-  return {strategy->name(), summary};
+  return {label, summary};
 }
 
 std::string comparison_table(const std::vector<NamedFidelity>& runs) {
@@ -75,14 +84,14 @@ void register_compare(CLI::App& root) {
     CameraPath path = read_path(args->path);
     args->make_output_folder();
     auto context = GlContext::headless();
+    const std::vector<std::string> labels = args->labels(world);
     std::vector<NamedFidelity> runs;
-    for (const std::string& name : args->strategies) runs.push_back(compare_one(*args, world, path, name));
+    for (size_t i = 0; i < labels.size(); ++i) runs.push_back(compare_one(*args, world, path, args->strategies[i], labels[i]));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
-      for (const auto& run : runs) all.push_back(nlohmann::ordered_json::parse(to_json(run.summary)));
+      for (const auto& run : runs) all.push_back(labelled_json(run.strategy, run.summary));
       std::printf("%s\n", (runs.size() == 1 ? all.front() : all).dump(2).c_str());
     }
-    if (runs.size() < 2) return;
     const std::string table = comparison_table(runs);
     write_file_atomically(args->out + "/compare.md", table);
     if (!args->json) std::printf("\n%s\nwrote %s/compare.md\n", table.c_str(), args->out.c_str());

@@ -17,18 +17,18 @@ namespace {
 // One strategy over the path, with a renderer of its own so no strategy inherits another's
 // GPU buffers.
 WalkSummary walk_one(const ReplayOptions& args, const World& world, const CameraPath& path,
-                     const std::string& name) {
+                     const std::string& name, const std::string& label) {
   const StrategyOptions options = args.strategy_options();
   auto strategy = make_strategy(name, world, options);
   Renderer renderer(args.lens.render_settings());
-  Progress progress("walk " + name, path.frames.size());
+  Progress progress("walk " + label, path.frames.size());
   auto frames = walk(path, args.lens.lens(), *strategy, renderer,
                      [&](size_t done, size_t) { progress.update(done); });
   progress.finish();
-  WalkSummary summary = summarize(strategy->name(), frames);
+  WalkSummary summary = summarize(label, frames);
   summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
   summary.budget_bytes = options.memory_budget_bytes;
-  const std::string stem = args.out + "/" + strategy->name();
+  const std::string stem = args.out + "/" + label;
   write_frames_csv(frames, stem + ".csv");
   write_summary_json(summary, stem + ".json");
   if (!args.json)
@@ -69,14 +69,14 @@ void register_walk(CLI::App& root) {
     CameraPath path = read_path(args->path);
     args->make_output_folder();
     auto context = GlContext::headless();
+    const std::vector<std::string> labels = args->labels(world);
     std::vector<WalkSummary> runs;
-    for (const std::string& name : args->strategies) runs.push_back(walk_one(*args, world, path, name));
+    for (size_t i = 0; i < labels.size(); ++i) runs.push_back(walk_one(*args, world, path, args->strategies[i], labels[i]));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const WalkSummary& s : runs) all.push_back(nlohmann::ordered_json::parse(to_json(s)));
       std::printf("%s\n", (runs.size() == 1 ? all.front() : all).dump(2).c_str());
     }
-    if (runs.size() < 2) return;
     const std::string table = comparison_table(runs);
     write_file_atomically(args->out + "/walk.md", table);
     if (!args->json) std::printf("\n%s\nwrote %s/walk.md\n", table.c_str(), args->out.c_str());

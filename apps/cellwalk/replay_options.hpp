@@ -11,6 +11,7 @@
 #include "cellwalk/error.hpp"
 
 #include "cellwalk/strategy.hpp"
+#include "cellwalk/world.hpp"
 #include "lens_options.hpp"
 
 namespace cellwalk::app {
@@ -51,6 +52,10 @@ struct ReplayOptions {
     std::filesystem::create_directories(out, ec);
     if (ec || !std::filesystem::is_directory(out)) fail(out, "cannot create the output folder: " + ec.message());
   }
+  // One label per --strategy, in order: the strategy's own name (its settings spelled out), or,
+  // where two names coincide (REVIEW's settings are not in its name), the text as given. Every
+  // strategy is made once here, so a bad name or a budget a strategy refuses fails before any run.
+  std::vector<std::string> labels(const World& world) const;
   StrategyOptions strategy_options() const {
     StrategyOptions options;
     options.memory_budget_bytes = static_cast<uint64_t>(budget_mib * 1024 * 1024);

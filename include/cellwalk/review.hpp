@@ -72,7 +72,7 @@ struct ReviewQuery {
   uint64_t already_buffered = 0;  // results that were buffered already (0 for CSearch: tested)
   uint64_t fetched = 0;       // of those, read and decoded (not already buffered)
   uint64_t object_pages = 0;  // pages of the world file those objects span
-  uint64_t dropped = 0;       // results that did not fit the object buffer
+  uint64_t dropped = 0;       // results not fetched: the first the buffer refused and all farther
   uint64_t evictions = 0;     // buffer evictions (Fig. 4.8) during the query
   double search_ms = 0, io_ms = 0, decode_ms = 0;
   uint64_t disk_ios() const { return node_reads + object_pages; }

@@ -46,6 +46,7 @@ struct CompareOptions {
   int every = 10;              // compare every k-th frame
   std::string image_dir;       // if set, writes truth/test/diff PNGs of compared frames
   int max_images = 10;         // at most this many frames' images
+  std::string label;           // names the images (frameN-LABEL.png); empty: the strategy's name
 };
 
 struct FidelitySummary {

@@ -54,6 +54,7 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
   std::vector<FidelityFrame> frames;
   Camera camera = lens;
   int images = 0;
+  const std::string label = options.label.empty() ? strategy.name() : options.label;
   for (size_t i = 0; i < path.frames.size(); i += static_cast<size_t>(options.every)) {
     apply(path.frames[i], camera);
     render_frame(truth, renderer, camera);
@@ -69,8 +70,8 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
     if (!options.image_dir.empty() && images < options.max_images) {
       const std::string stem = options.image_dir + "/frame" + std::to_string(i);
       write_png(truth_color, stem + "-truth.png");
-      write_png(test_color, stem + "-" + strategy.name() + ".png");
-      write_png(diff, stem + "-" + strategy.name() + "-diff.png");
+      write_png(test_color, stem + "-" + label + ".png");
+      write_png(diff, stem + "-" + label + "-diff.png");
       ++images;
     }
     if (progress) progress(i + 1, path.frames.size());
