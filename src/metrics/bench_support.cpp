@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "cellwalk/atomic_file.hpp"
+#include "core/stopwatch.hpp"
 
 namespace cellwalk::bench {
 namespace {
@@ -110,6 +111,19 @@ WorkDir::WorkDir(const std::string& dir, const std::string& name) : owned_(dir.e
 WorkDir::~WorkDir() {
   std::error_code ignored;
   if (owned_) std::filesystem::remove_all(path_, ignored);
+}
+
+SelectedFrame select_frame(Strategy& s, const Camera& camera, double time) {
+  std::vector<DrawItem> items;
+  FrameStats stats;
+  stats.time = time;
+  Stopwatch watch;
+  s.select(camera, items, stats);
+  SelectedFrame f;
+  for (const DrawItem& item : items)
+    if (const Mesh* m = s.mesh(item, stats)) f.triangles += m->triangle_count();
+  f.select_ms = watch.ms();
+  return f;
 }
 
 }  // namespace cellwalk::bench

@@ -1,6 +1,6 @@
 // What every `cellwalk bench <name>` shares (DESIGN.md "Measuring"): the report header's date
-// and machine, the work directory for generated scenes and worlds, number formatting, and
-// markdown / CSV tables of strings.
+// and machine, the work directory for generated scenes and worlds, number formatting,
+// markdown / CSV tables of strings, and a strategy's frame with rendering modelled.
 #pragma once
 
 #include <chrono>
@@ -8,6 +8,9 @@
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
+
+#include "cellwalk/camera.hpp"
+#include "cellwalk/strategy.hpp"
 
 namespace cellwalk::bench {
 
@@ -37,6 +40,15 @@ std::string md_table(const std::vector<std::string>& header, const Table& rows);
 
 // A CSV file (cells written as they are: the caller keeps commas out), written atomically.
 void write_csv(const std::filesystem::path& file, const std::vector<std::string>& header, const Table& rows);
+
+// One frame of `s` at `camera` without rendering: the measured time of its select and mesh calls
+// (query, I/O, decode) and the triangles it would draw, which a bench turns into modelled render
+// time, the same for every strategy. `time` is the path's time (strategies derive speed from it).
+struct SelectedFrame {
+  double select_ms = 0.0;
+  uint64_t triangles = 0;
+};
+SelectedFrame select_frame(Strategy& s, const Camera& camera, double time);
 
 // Where a bench puts its scene, world and side files: `dir` when given (kept), else a fresh
 // temporary directory "cellwalk-bench-<name>-<pid>" removed when the WorkDir goes.

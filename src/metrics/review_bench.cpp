@@ -142,16 +142,9 @@ Run replay(const World& world, const CameraPath& path, const std::string& strate
   Camera camera = review_lens(p.depth);
   for (const PathFrame& f : path.frames) {
     apply(f, camera);
-    std::vector<DrawItem> items;
-    FrameStats stats;
-    stats.time = f.time;
-    Stopwatch watch;
-    s.select(camera, items, stats);
-    uint64_t triangles = 0;
-    for (const DrawItem& item : items)
-      if (const Mesh* m = s.mesh(item, stats)) triangles += m->triangle_count();
-    r.select_ms.push_back(watch.ms());
-    render_ms.push_back(double(triangles) / (p.render_mtri_per_s * 1e3));
+    const bench::SelectedFrame frame = bench::select_frame(s, camera, f.time);
+    r.select_ms.push_back(frame.select_ms);
+    render_ms.push_back(double(frame.triangles) / (p.render_mtri_per_s * 1e3));
   }
   r.queries = s.queries();
   r.frames = s.frames();

@@ -101,9 +101,8 @@ void storage_section(const TreeWorld& w, Report& r) {
 
 // ---- Exp. 1 ------------------------------------------------------------------------------------
 
-// Hit rate (%) of the node cache over a query stream.
-double hit_rate(const HdovTree& tree, Policy policy, uint64_t pages, double eta, const std::vector<CellId>& queries) {
-  HdovSearcher searcher(tree, VPageScheme::kIndexedVertical, {.policy = policy, .pages = pages});
+// Flips to each queried cell and runs the threshold search at η; the I/O counters add up.
+HdovCounters run_queries(HdovSearcher& searcher, double eta, const std::vector<CellId>& queries) {
   HdovCounters io;
   std::vector<HdovPick> picks;
   for (CellId c : queries) {
@@ -111,6 +110,13 @@ double hit_rate(const HdovTree& tree, Policy policy, uint64_t pages, double eta,
     picks.clear();
     searcher.search({.eta = eta}, picks, io);
   }
+  return io;
+}
+
+// Hit rate (%) of the node cache over a query stream.
+double hit_rate(const HdovTree& tree, Policy policy, uint64_t pages, double eta, const std::vector<CellId>& queries) {
+  HdovSearcher searcher(tree, VPageScheme::kIndexedVertical, {.policy = policy, .pages = pages});
+  run_queries(searcher, eta, queries);
   const BufferCounters bc = searcher.cache_counters();
   return 100.0 * double(bc.hits) / double(std::max<uint64_t>(1, bc.hits + bc.misses));
 }
@@ -118,14 +124,7 @@ double hit_rate(const HdovTree& tree, Policy policy, uint64_t pages, double eta,
 // Node visits per query at η (the working set a cache must hold for LRU to hit).
 double visits_per_query(const HdovTree& tree, double eta, const std::vector<CellId>& queries) {
   HdovSearcher searcher(tree, VPageScheme::kIndexedVertical, {.policy = Policy::kNone});
-  HdovCounters io;
-  std::vector<HdovPick> picks;
-  for (CellId c : queries) {
-    searcher.flip(c, io);
-    picks.clear();
-    searcher.search({.eta = eta}, picks, io);
-  }
-  return double(io.node_visits) / double(queries.size());
+  return double(run_queries(searcher, eta, queries).node_visits) / double(queries.size());
 }
 
 void cache_section(const VisualBenchParams& p, const HdovTree& tree, const std::vector<CellId>& cont,

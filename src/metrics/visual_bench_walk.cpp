@@ -9,7 +9,6 @@
 #include "cellwalk/review.hpp"
 #include "cellwalk/strategy.hpp"
 #include "core/progress.hpp"
-#include "core/stopwatch.hpp"
 #include "metrics/bench_support.hpp"
 
 namespace cellwalk::visual_bench {
@@ -30,16 +29,9 @@ void replay(Strategy& s, const CameraPath& path, const VisualBenchParams& p, Wal
   Camera camera = lens_of(p);
   for (const PathFrame& f : path.frames) {
     apply(f, camera);
-    std::vector<DrawItem> items;
-    FrameStats stats;
-    stats.time = f.time;
-    Stopwatch watch;
-    s.select(camera, items, stats);
-    uint64_t triangles = 0;
-    for (const DrawItem& item : items)
-      if (const Mesh* m = s.mesh(item, stats)) triangles += m->triangle_count();
-    run.triangles += triangles;
-    run.frame_ms.push_back(watch.ms() + double(triangles) / (p.render_mtri_per_s * 1e3));
+    const bench::SelectedFrame frame = bench::select_frame(s, camera, f.time);
+    run.triangles += frame.triangles;
+    run.frame_ms.push_back(frame.select_ms + double(frame.triangles) / (p.render_mtri_per_s * 1e3));
   }
   run.peak = s.peak_resident_bytes();
 }
