@@ -509,18 +509,41 @@ TEST(ConservativeEngine, StaggeredWallsHideOnlyWithFusion) {
   Scene scene(boxes({a, b, wide}));
   EXPECT_FALSE(visibility::occluder_hides(kCell, a, wide));
   EXPECT_FALSE(visibility::occluder_hides(kCell, b, wide));
-  // The joint shadow leaves little slack: at the default 64² per face, pixel conservativeness
-  // eats it; 128² resolves it.
+  // The joint shadow leaves little slack: pixel conservativeness may eat it at a low
+  // resolution; 128² resolves it, and so does the default.
   ConservativeParams fine;
   fine.face_resolution = 128;
   ConservativeParams fine_shrinking = only_shrinking();
   fine_shrinking.face_resolution = 128;
   EXPECT_FALSE(scene.sees(kCell, 2, fine));
   EXPECT_FALSE(scene.sees(kCell, 2, fine_shrinking));
+  EXPECT_FALSE(scene.sees(kCell, 2, ConservativeParams{}));
   EXPECT_TRUE(scene.sees(kCell, 2, only_corners()));
   // And the oracle agrees that it is hidden.
   RayOracle oracle(*scene.world);
   Random rng(11);
+  EXPECT_EQ(oracle.visible(kCell, rng, 60, 40).count(2), 0u);
+}
+
+// The far field of a large city: two walls 100 m away, apart (no bridge), whose shadows
+// overlap by only ~1.1° as seen from the cell. Every pixel must be covered by one shrunk wall
+// alone, so at 64² per face (up to 1.8° per pixel) some leaf of the cell keeps a pixel across
+// the overlap open and the box behind shows through it; at the default 256² every pixel lies
+// wholly in one wall's shadow.
+TEST(ConservativeEngine, FarWallsWhoseShadowsOverlapByLessThanACoarsePixelFuse) {
+  const Aabb a = box({100, 0, -40}, {102, 40, 2.6f}), b = box({104, 0, 0.6f}, {106, 40, 40});
+  const Aabb behind = box({120, 0, -8}, {121, 6, 8});
+  Scene scene(boxes({a, b, behind}));
+  EXPECT_FALSE(visibility::occluder_hides(kCell, a, behind));
+  EXPECT_FALSE(visibility::occluder_hides(kCell, b, behind));
+  ConservativeParams coarse = only_shrinking();
+  coarse.face_resolution = 64;
+  EXPECT_TRUE(scene.sees(kCell, 2, coarse));
+  EXPECT_EQ(ConservativeParams{}.face_resolution, 256);
+  EXPECT_FALSE(scene.sees(kCell, 2, only_shrinking()));
+  EXPECT_FALSE(scene.sees(kCell, 2, ConservativeParams{}));
+  RayOracle oracle(*scene.world);
+  Random rng(13);
   EXPECT_EQ(oracle.visible(kCell, rng, 60, 40).count(2), 0u);
 }
 
