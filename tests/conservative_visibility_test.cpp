@@ -154,6 +154,12 @@ TEST(CubeDepthBuffer, OccluderHidesWhatIsBehindItOnly) {
   EXPECT_FALSE(depth.hidden(box({-1, 1, -1}, {1, 3, 1})));    // around the eye
   EXPECT_GT(depth.covered_fraction(), 0.0);
   EXPECT_LT(depth.covered_fraction(), 0.5);
+  depth.aim(Vec3(0, 2, 0));  // re-aimed, it forgets the occluder
+  EXPECT_FALSE(depth.hidden(box({12, 1, -1}, {13, 3, 1})));
+  EXPECT_EQ(depth.covered_fraction(), 0.0);
+  depth.add_occluder(box({-6, -5, -10}, {-5, 10, 10}));  // and renders anew
+  EXPECT_TRUE(depth.hidden(box({-13, 1, -1}, {-12, 3, 1})));
+  EXPECT_FALSE(depth.hidden(box({12, 1, -1}, {13, 3, 1})));
 }
 
 // A box across several faces (around the eye's axes) is found hidden in all of them.
@@ -172,9 +178,13 @@ TEST(CubeDepthBuffer, OccluderAroundTheEyeHidesAcrossFaces) {
 
 // ---- back-face test (vLOD §5.3) -----------------------------------------------------------
 
-// The engine skips every occluder (group) for which may_lower says no: the buffer must answer
-// exactly as if all had been rendered. Oracle: a second buffer that renders them all.
-TEST(CubeDepthBuffer, SkippingWhatMayNotLowerChangesNoAnswer) {
+// The engine skips every occluder (group) for which may_lower says no, re-aims one buffer per
+// refinement level from box to box, and skips tiles and groups of tiles that no render can
+// lower. Oracle: each render alone in a new buffer, where nothing can be skipped; their
+// per-pixel minimum is what a buffer holding every occluder must hold. A buffer wanting every
+// pixel is checked against it pixel by pixel, and one that demands the occludees must answer
+// hidden() as that one does. 96² pixels make 2 × 2 groups of tiles per face.
+TEST(CubeDepthBuffer, SkippingAndReaimingChangeNoPixelAndNoAnswer) {
   Random rng(23);
   auto random_box = [&](float spread, float size) {
     const Vec3 c(float(rng.uniform(-spread, spread)), float(rng.uniform(-spread / 4, spread / 4)),
@@ -182,37 +192,58 @@ TEST(CubeDepthBuffer, SkippingWhatMayNotLowerChangesNoAnswer) {
     const Vec3 h(float(rng.uniform(0.2, size)), float(rng.uniform(0.2, size)), float(rng.uniform(0.2, size)));
     return Aabb{c - h, c + h};
   };
-  const Vec3 eye(0.0f), half(0.5f, 0.25f, 0.5f);
-  int hidden = 0, skipped = 0;
-  for (int trial = 0; trial < 20; ++trial) {
-    CubeDepthBuffer all(eye, 32), culled(eye, 32);
+  constexpr int kResolution = 96;
+  const Vec3 half(0.5f, 0.25f, 0.5f);
+  int hidden = 0, skipped = 0, mismatched = 0, covered = 0;
+  CubeDepthBuffer every(Vec3(0.0f), kResolution), culled(Vec3(0.0f), kResolution);
+  for (int trial = 0; trial < 12; ++trial) {
+    const Vec3 eye(float(rng.uniform(-2, 2)), float(rng.uniform(-1, 1)), float(rng.uniform(-2, 2)));
+    every.aim(eye);
+    culled.aim(eye);
     std::vector<Aabb> occludees;
     for (int i = 0; i < 60; ++i) occludees.push_back(random_box(80.0f, 3.0f));
     std::erase_if(occludees, [&](const Aabb& b) { return b.overlaps(Aabb{eye - Vec3(1.0f), eye + Vec3(1.0f)}); });
-    for (const Aabb& b : occludees) all.demand(b), culled.demand(b);
+    for (const Aabb& b : occludees) culled.demand(b);
     std::vector<Aabb> occluders;
     for (int i = 0; i < 80; ++i) occluders.push_back(random_box(60.0f, 12.0f));
     std::erase_if(occluders, [&](const Aabb& b) { return b.overlaps(Aabb{eye - 2.0f * half, eye + 2.0f * half}); });
     std::sort(occluders.begin(), occluders.end(), [&](const Aabb& a, const Aabb& b) {
       return glm::length(a.center() - eye) < glm::length(b.center() - eye);
     });
-    for (const Aabb& o : occluders) {
+    std::vector<float> oracle(size_t(6) * kResolution * kResolution, std::numeric_limits<float>::infinity());
+    const auto render = [&](CubeDepthBuffer& d, const Aabb& o) {
       const Aabb eroded{o.min + half, o.max - half};
-      const bool render = culled.may_lower(o);
-      skipped += !render;
-      for (CubeDepthBuffer* d : {&all, &culled}) {
-        if (d == &culled && !render) continue;
-        if (!eroded.empty()) d->add_occluder(eroded);
-        d->add_occluder_for_cell(o, half);
+      if (!eroded.empty()) d.add_occluder(eroded);
+      d.add_occluder_for_cell(o, half);
+    };
+    for (const Aabb& o : occluders) {
+      if (every.may_lower(o)) render(every, o);
+      if (culled.may_lower(o)) render(culled, o); else ++skipped;
+      for (int call = 0; call < 2; ++call) {
+        CubeDepthBuffer alone(eye, kResolution);
+        const Aabb eroded{o.min + half, o.max - half};
+        if (call == 0 && !eroded.empty()) alone.add_occluder(eroded);
+        if (call == 1) alone.add_occluder_for_cell(o, half);
+        for (int face = 0, k = 0; face < 6; ++face)
+          for (int j = 0; j < kResolution; ++j)
+            for (int i = 0; i < kResolution; ++i, ++k) oracle[size_t(k)] = std::min(oracle[size_t(k)], alone.depth(face, i, j));
       }
     }
+    for (int face = 0, k = 0; face < 6; ++face)
+      for (int j = 0; j < kResolution; ++j)
+        for (int i = 0; i < kResolution; ++i, ++k) {
+          mismatched += every.depth(face, i, j) != oracle[size_t(k)];
+          covered += oracle[size_t(k)] != std::numeric_limits<float>::infinity();
+        }
     for (const Aabb& b : occludees) {
-      EXPECT_EQ(all.hidden(b), culled.hidden(b)) << trial;
-      hidden += all.hidden(b);
+      EXPECT_EQ(every.hidden(b), culled.hidden(b)) << trial;
+      hidden += every.hidden(b);
     }
   }
-  EXPECT_GT(hidden, 50);   // the scenes do occlude
-  EXPECT_GT(skipped, 100);  // and the check does skip
+  EXPECT_EQ(mismatched, 0);
+  EXPECT_GT(covered, 10000);
+  EXPECT_GT(hidden, 30);   // the scenes do occlude
+  EXPECT_GT(skipped, 60);  // and the check does skip
 }
 
 TEST(BoxTree, WalkFindsExactlyTheBoxesABruteForceScanFinds) {
@@ -236,6 +267,63 @@ TEST(BoxTree, WalkFindsExactlyTheBoxesABruteForceScanFinds) {
       if (boxes[i].overlaps(query)) expected.insert(i);
     EXPECT_EQ(found, expected) << q;
   }
+}
+
+// Renumbered in leaf order, the items are a permutation of the old, and both walks find under
+// the new numbers exactly the boxes a brute-force scan finds.
+TEST(BoxTree, RenumberedInLeafOrderBothWalksFindWhatABruteForceScanFinds) {
+  Random rng(31);
+  std::vector<Aabb> boxes;
+  for (int i = 0; i < 400; ++i) {
+    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
+    boxes.push_back({c, c + Vec3(float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)))});
+  }
+  visibility::BoxTree tree(boxes);
+  const std::vector<uint32_t> old = tree.number_in_leaf_order();
+  ASSERT_EQ(old.size(), boxes.size());
+  EXPECT_EQ(std::set<uint32_t>(old.begin(), old.end()).size(), boxes.size());
+  std::vector<Aabb> renumbered;
+  for (uint32_t o : old) renumbered.push_back(boxes[o]);
+  int visited = 0;
+  for (int q = 0; q < 50; ++q) {
+    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
+    const Aabb query{c, c + Vec3(float(rng.uniform(1, 20)))};
+    std::set<uint32_t> ordered, unordered, expected;
+    const auto enter = [&](const Aabb& group) { return group.overlaps(query); };
+    tree.front_to_back(query, enter, [&](uint32_t i) { if (renumbered[i].overlaps(query)) ordered.insert(i); });
+    tree.depth_first(enter, [&](uint32_t i) { ++visited; if (renumbered[i].overlaps(query)) unordered.insert(i); });
+    for (uint32_t i = 0; i < renumbered.size(); ++i)
+      if (renumbered[i].overlaps(query)) expected.insert(i);
+    EXPECT_EQ(ordered, expected) << q;
+    EXPECT_EQ(unordered, expected) << q;
+  }
+  EXPECT_LT(visited, 50 * 400 / 4);  // the walks do cull
+}
+
+// The filter never rejects a box the exact slab test accepts, also for boxes that touch the
+// segment only at an end or along a face (where rounding decides), and it does reject boxes.
+TEST(SegmentFilter, AcceptsEveryBoxTheExactTestAccepts) {
+  Random rng(37);
+  int accepted = 0, rejected = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const float scale = trial % 2 ? 1.0f : 3000.0f;
+    auto point = [&] {
+      return scale * Vec3(float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)), float(rng.uniform(-1, 1)));
+    };
+    const Vec3 a = point(), b = trial % 5 == 0 ? Vec3(a.x, a.y, point().z) : point();
+    Aabb box{glm::min(point(), point()), glm::max(point(), point())};
+    if (trial % 3 == 0) box.min.x = box.max.x = glm::mix(a.x, b.x, float(rng.uniform(0, 1)));  // grazing
+    if (trial % 7 == 0) box.max = glm::max(box.min, b);                                         // at an end
+    const bool exact = visibility::segment_meets_box(a, b, box);
+    const bool filter = visibility::SegmentFilter(a, b).may_meet(box);
+    if (exact) {
+      EXPECT_TRUE(filter) << trial;
+    }
+    accepted += exact;
+    rejected += !filter;
+  }
+  EXPECT_GT(accepted, 1000);
+  EXPECT_GT(rejected, 1000);
 }
 
 TEST(BackfaceTest, ConeBoundsEveryDirection) {

@@ -45,6 +45,13 @@ void BoxTree::build(uint32_t node, uint32_t begin, uint32_t end, const std::vect
   build(child + 1, mid, end, boxes, depth + 1);
 }
 
+std::vector<uint32_t> BoxTree::number_in_leaf_order() {
+  std::vector<uint32_t> old = std::move(items_);
+  items_.resize(old.size());
+  std::iota(items_.begin(), items_.end(), 0u);
+  return old;
+}
+
 float BoxTree::gap(const Aabb& a, const Aabb& b) {
   const Vec3 g = glm::max(glm::max(a.min - b.max, b.min - a.max), Vec3(0.0f));
   return glm::dot(g, g);

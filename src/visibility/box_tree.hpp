@@ -23,23 +23,19 @@ class BoxTree {
   // of a subtree entered. Items of one leaf come in their stored order.
   template <class Enter, class Item>
   void front_to_back(const Aabb& region, Enter&& enter, Item&& item) const {
-    if (nodes_.empty()) return;
-    uint32_t stack[64];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& n = nodes_[stack[--top]];
-      if (!enter(n.box)) continue;
-      if (n.count > 0) {
-        for (uint32_t i = n.first; i < n.first + n.count; ++i) item(items_[i]);
-        continue;
-      }
-      const uint32_t a = n.first, b = n.first + 1;  // children are adjacent
-      const bool a_first = gap(region, nodes_[a].box) <= gap(region, nodes_[b].box);
-      stack[top++] = a_first ? b : a;  // pushed first, visited second
-      stack[top++] = a_first ? a : b;
-    }
+    walk([&](const Aabb& a, const Aabb& b) { return gap(region, a) <= gap(region, b); }, enter, item);
   }
+
+  // The same without an order among children, for a walk whose answer does not depend on it.
+  template <class Enter, class Item>
+  void depth_first(Enter&& enter, Item&& item) const {
+    walk([](const Aabb&, const Aabb&) { return true; }, enter, item);
+  }
+
+  // Renumbers the items by their place in the leaves, so that the items of a subtree are
+  // numbered together and a walk reads the caller's data about them from one stretch of
+  // memory. Returns, for each new number, the old one: the caller reorders its data by it.
+  std::vector<uint32_t> number_in_leaf_order();
 
   // Squared distance between two boxes (0 when they overlap).
   static float gap(const Aabb& a, const Aabb& b);
@@ -52,6 +48,27 @@ class BoxTree {
   };
   std::vector<Node> nodes_;
   std::vector<uint32_t> items_;
+
+  // Depth first; `first(a, b)` says whether the child with box a goes before the one with b.
+  template <class First, class Enter, class Item>
+  void walk(First&& first, Enter& enter, Item& item) const {
+    if (nodes_.empty()) return;
+    uint32_t stack[64];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes_[stack[--top]];
+      if (!enter(n.box)) continue;
+      if (n.count > 0) {
+        for (uint32_t i = n.first; i < n.first + n.count; ++i) item(items_[i]);
+        continue;
+      }
+      const uint32_t a = n.first, b = n.first + 1;  // children are adjacent
+      const bool a_first = first(nodes_[a].box, nodes_[b].box);
+      stack[top++] = a_first ? b : a;  // pushed first, visited second
+      stack[top++] = a_first ? a : b;
+    }
+  }
 
   void build(uint32_t node, uint32_t begin, uint32_t end, const std::vector<Aabb>& boxes, int depth);
 };

@@ -30,11 +30,14 @@ constexpr float kBelowFloor = 1.0e5f;
 // A box inside the solid of `object`, or inside the union of the solids of `object` and
 // `other` (a bridge between two boxes that touch). `grounded` is the box reaching down
 // without end when it stands on the floor (below which there is no geometry), else the box.
+// The objects' bounds are kept beside it: every cell reads them for each occluder it meets.
 struct Occluder {
   Aabb box;
   Aabb grounded;
   ObjectId object;
   ObjectId other;
+  Aabb object_bounds;
+  Aabb other_bounds;
 };
 
 // A segment between two points at or above the floor never passes below it, so a box whose
@@ -129,6 +132,10 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     bounds.reserve(occluders_.size());
     for (const Occluder& o : occluders_) bounds.push_back(o.grounded);  // holds o.box too
     tree_ = std::make_unique<visibility::BoxTree>(bounds);
+    std::vector<Occluder> in_leaf_order;
+    in_leaf_order.reserve(occluders_.size());
+    for (uint32_t old : tree_->number_in_leaf_order()) in_leaf_order.push_back(occluders_[old]);
+    occluders_.swap(in_leaf_order);
     stats_.objects = world.object_count();
     stats_.occluder_boxes = occluders_.size() - stats_.bridges;
     stats_.occluder_seconds =
@@ -152,7 +159,8 @@ class ConservativeEngineImpl final : public VisibilityEngine {
       else
         candidates.push_back(id);
     }
-    refine(cell.box, 0, std::move(candidates), visible);
+    Buffers buffers;
+    refine(cell.box, 0, std::move(candidates), visible, buffers);
     for (ObjectId id = 0; id < occludees_.size(); ++id)
       if (visible[id]) out.objects.push_back(id);
     return out;
@@ -162,19 +170,32 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   const World& world_;
   ConservativeParams params_;
   std::vector<Aabb> occludees_;    // per object, the drawn geometry's box
-  std::vector<Occluder> occluders_;  // ascending object ids
+  std::vector<Occluder> occluders_;  // in the tree's leaf order
   std::unique_ptr<visibility::BoxTree> tree_;  // over occluders_' grounded boxes
   float floor_ = 0.0f;               // no decoded geometry lies below this height
   ConservativeStats stats_;
 
+  // One depth buffer per refinement level, re-aimed for each box of the level: the walk is
+  // depth first, so a level's buffer is done with before the next box of that level.
+  using Buffers = std::vector<std::unique_ptr<CubeDepthBuffer>>;
+
+  CubeDepthBuffer& buffer_for(Buffers& buffers, size_t level, const Vec3& eye) const {
+    if (buffers.size() <= level) buffers.resize(level + 1);
+    if (!buffers[level])
+      buffers[level] = std::make_unique<CubeDepthBuffer>(eye, params_.face_resolution);
+    else
+      buffers[level]->aim(eye);
+    return *buffers[level];
+  }
+
   // Tests the candidates from `box`; those not hidden from it are visible when the box is a
   // leaf of the refinement, else they are tested from each child, minus those an earlier
   // child already showed to be visible.
-  void refine(const Aabb& box, int level, std::vector<ObjectId> candidates,
-              std::vector<uint8_t>& visible) const {
+  void refine(const Aabb& box, int level, std::vector<ObjectId> candidates, std::vector<uint8_t>& visible,
+              Buffers& buffers) const {
     std::erase_if(candidates, [&](ObjectId id) { return visible[id] != 0; });
     if (candidates.empty()) return;
-    CubeDepthBuffer depth(box.center(), params_.face_resolution);
+    CubeDepthBuffer& depth = buffer_for(buffers, size_t(level), box.center());
     for (ObjectId id : candidates) depth.demand(occludees_[id]);
     if (params_.occluder_shrinking) render_occluders(box, depth);
     std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth); });
@@ -182,12 +203,12 @@ class ConservativeEngineImpl final : public VisibilityEngine {
       for (ObjectId id : candidates) visible[id] = 1;
       return;
     }
-    for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, visible);
+    for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, visible, buffers);
   }
 
   // Viewpoints must lie outside the occluder's solid for its crossing argument.
   bool usable(const Occluder& o, const Aabb& region) const {
-    return !world_.object(o.object).bounds.overlaps(region) && !world_.object(o.other).bounds.overlaps(region);
+    return !o.object_bounds.overlaps(region) && !o.other_bounds.overlaps(region);
   }
 
   // Renders the shrunk occluders usable from `box` into the buffer, front to back. Groups of
@@ -226,13 +247,12 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   bool corner_test_hides(ObjectId id, const Aabb& cell) const {
     const Aabb& box = occludees_[id];
     const Vec3 eye = cell.center(), target = box.center();
+    const visibility::SegmentFilter segment(eye, target);
     const float radius2 = float(params_.corner_test_radius * params_.corner_test_radius);
     bool found = false;
-    tree_->front_to_back(
-        cell,
+    tree_->depth_first(
         [&](const Aabb& group) {
-          return !found && visibility::BoxTree::gap(group, cell) <= radius2 &&
-                 visibility::segment_meets_box(eye, target, group);
+          return !found && visibility::BoxTree::gap(group, cell) <= radius2 && segment.may_meet(group);
         },
         [&](uint32_t i) {
           const Occluder& o = occluders_[i];
@@ -307,8 +327,8 @@ class ConservativeEngineImpl final : public VisibilityEngine {
 
   void add_occluder(const Aabb& raw, ObjectId object, ObjectId other) {
     const Aabb box = pulled_in(raw);
-    occluders_.push_back({box, params_.grounded_occluders ? reaching_down(box, raw, floor_) : box,
-                          object, other});
+    occluders_.push_back({box, params_.grounded_occluders ? reaching_down(box, raw, floor_) : box, object, other,
+                          world_.object(object).bounds, world_.object(other).bounds});
   }
 };
 

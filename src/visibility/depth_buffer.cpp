@@ -79,13 +79,78 @@ double max_norm_distance(const glm::dvec3& lo, const glm::dvec3& hi) {
 }  // namespace
 
 CubeDepthBuffer::CubeDepthBuffer(const Vec3& eye, int resolution)
-    : eye_(eye),
-      n_(resolution),
+    : n_(resolution),
       tiles_((resolution + kTile - 1) / kTile),
-      depth_(size_t(6) * resolution * resolution, kFar),
-      tile_max_(size_t(6) * tiles_ * tiles_, kFar),
+      depth_(size_t(6) * resolution * resolution),
+      demand_(size_t(6) * resolution * resolution),
+      tile_max_(size_t(6) * tiles_ * tiles_),
+      group_max_(size_t(6) * ((tiles_ + kGroup - 1) / kGroup) * ((tiles_ + kGroup - 1) / kGroup)),
+      groups_((tiles_ + kGroup - 1) / kGroup),
+      tile_epoch_(size_t(6) * tiles_ * tiles_, 0),
       columns_(size_t(resolution)),
-      rows_(size_t(resolution)) {}
+      rows_(size_t(resolution)) {
+  aim(eye);
+}
+
+void CubeDepthBuffer::aim(const Vec3& eye) {
+  eye_ = eye;
+  demanding_ = false;
+  fill_maxima(kFar);  // every pixel wanted and empty
+  if (++epoch_ == 0) {  // the stamps wrapped: none may look live by chance
+    std::fill(tile_epoch_.begin(), tile_epoch_.end(), 0u);
+    epoch_ = 1;
+  }
+}
+
+void CubeDepthBuffer::fill_maxima(float value) {
+  std::fill(tile_max_.begin(), tile_max_.end(), value);
+  std::fill(group_max_.begin(), group_max_.end(), value);
+}
+
+// A group's largest depth changes only when it came from this tile. Raising a tile (demand)
+// raises its group; lowering one (rendering) may lower it, found by reading the group again.
+void CubeDepthBuffer::set_tile_max(int face, int ti, int tj, float largest) {
+  float& tile = tile_max_[tile_index(face, ti, tj)];
+  float& group = group_max_[group_index(face, ti, tj)];
+  const float old = tile;
+  tile = largest;
+  if (largest >= group) {
+    group = largest;
+    return;
+  }
+  if (old < group) return;
+  float top = -kFar;
+  const int gi = ti / kGroup * kGroup, gj = tj / kGroup * kGroup;
+  for (int j = gj; j < std::min(tiles_, gj + kGroup); ++j)
+    for (int i = gi; i < std::min(tiles_, gi + kGroup); ++i) top = std::max(top, tile_max_[tile_index(face, i, j)]);
+  group = top;
+}
+
+template <class Visit>
+bool CubeDepthBuffer::tiles_deeper_than(int face, int i0, int i1, int j0, int j1, double above,
+                                        Visit&& visit) const {
+  const int ti0 = i0 / kTile, ti1 = i1 / kTile, tj0 = j0 / kTile, tj1 = j1 / kTile;
+  for (int gj = tj0 / kGroup; gj <= tj1 / kGroup; ++gj)
+    for (int gi = ti0 / kGroup; gi <= ti1 / kGroup; ++gi) {
+      if (!(double(group_max_[(size_t(face) * groups_ + gj) * groups_ + gi]) > above)) continue;
+      for (int tj = std::max(tj0, gj * kGroup); tj <= std::min(tj1, gj * kGroup + kGroup - 1); ++tj)
+        for (int ti = std::max(ti0, gi * kGroup); ti <= std::min(ti1, gi * kGroup + kGroup - 1); ++ti)
+          if (double(tile_max_[tile_index(face, ti, tj)]) > above && visit(ti, tj)) return true;
+    }
+  return false;
+}
+
+void CubeDepthBuffer::make_live(int face, int ti, int tj) {
+  uint32_t& stamp = tile_epoch_[tile_index(face, ti, tj)];
+  if (stamp == epoch_) return;
+  stamp = epoch_;
+  const int i0 = ti * kTile, width = tile_end(ti) - i0;
+  for (int j = tj * kTile; j < tile_end(tj); ++j) {
+    const size_t row = (size_t(face) * n_ + j) * n_ + i0;
+    std::fill_n(depth_.begin() + ptrdiff_t(row), width, kFar);
+    std::fill_n(demand_.begin() + ptrdiff_t(row), width, uint8_t(0));
+  }
+}
 
 void CubeDepthBuffer::add_occluder(const Aabb& box) { add_occluder_for_cell(box, Vec3(0.0f)); }
 
@@ -148,38 +213,39 @@ void CubeDepthBuffer::add_to_face(int face, const glm::dvec3& lo, const glm::dve
   };
   const double skip = std::max(front, 0.0);  // pixels at or nearer than this gain nothing
   float* pixels = depth_.data() + size_t(face) * n_ * n_;
-  for (int tj = j0 / kTile; tj * kTile < j1; ++tj)
-    for (int ti = i0 / kTile; ti * kTile < i1; ++ti) {
-      if (double(tile_max_[tile_index(face, ti, tj)]) <= skip) continue;
-      bool wrote = false;
-      for (int j = std::max(j0, tj * kTile); j < std::min(j1, (tj + 1) * kTile); ++j) {
-        const Span* row = nullptr;
-        for (int i = std::max(i0, ti * kTile); i < std::min(i1, (ti + 1) * kTile); ++i) {
-          float& pixel = pixels[size_t(j) * n_ + i];
-          if (double(pixel) <= skip || !wanted(face, i, j)) continue;
-          if (!row) {
-            row = &span(f.c, j, rows_);
-            if (!(base <= row->exit && row->enter <= exit_a)) break;
-          }
-          const Span& column = span(f.b, i, columns_);
-          if (!(base <= column.exit && column.enter <= exit_a && column.enter <= row->exit && row->enter <= column.exit))
-            continue;
-          const double d = std::max({base, column.enter, row->enter});
-          // Round up: the stored depth may only exceed the occluder's.
-          pixel = std::min(pixel, std::nextafter(float(d), kFar));
-          wrote = true;
+  // Pixels with depth <= skip are not written (the tile is skipped where all wanted ones are).
+  tiles_deeper_than(face, i0, i1 - 1, j0, j1 - 1, skip, [&](int ti, int tj) {
+    make_live(face, ti, tj);  // not live only while every pixel is wanted
+    bool wrote = false;
+    for (int j = std::max(j0, tj * kTile); j < std::min(j1, (tj + 1) * kTile); ++j) {
+      const Span* row = nullptr;
+      for (int i = std::max(i0, ti * kTile); i < std::min(i1, (ti + 1) * kTile); ++i) {
+        float& pixel = pixels[size_t(j) * n_ + i];
+        if (double(pixel) <= skip || !wanted(face, i, j)) continue;
+        if (!row) {
+          row = &span(f.c, j, rows_);
+          if (!(base <= row->exit && row->enter <= exit_a)) break;
         }
+        const Span& column = span(f.b, i, columns_);
+        if (!(base <= column.exit && column.enter <= exit_a && column.enter <= row->exit && row->enter <= column.exit))
+          continue;
+        const double d = std::max({base, column.enter, row->enter});
+        // Round up: the stored depth may only exceed the occluder's.
+        pixel = std::min(pixel, std::nextafter(float(d), kFar));
+        wrote = true;
       }
-      if (wrote) update_tile(face, ti, tj);
     }
+    if (wrote) update_tile(face, ti, tj);
+    return false;
+  });
 }
 
 void CubeDepthBuffer::update_tile(int face, int ti, int tj) {
   float largest = -kFar;
-  for (int j = tj * kTile; j < std::min(n_, (tj + 1) * kTile); ++j)
-    for (int i = ti * kTile; i < std::min(n_, (ti + 1) * kTile); ++i)
+  for (int j = tj * kTile; j < tile_end(tj); ++j)
+    for (int i = ti * kTile; i < tile_end(ti); ++i)
       if (wanted(face, i, j)) largest = std::max(largest, depth_[(size_t(face) * n_ + j) * n_ + i]);
-  tile_max_[tile_index(face, ti, tj)] = largest;
+  set_tile_max(face, ti, tj, largest);
 }
 
 std::optional<CubeDepthBuffer::PixelRect> CubeDepthBuffer::occludee_pixels(int face, const glm::dvec3& lo,
@@ -200,26 +266,30 @@ std::optional<CubeDepthBuffer::PixelRect> CubeDepthBuffer::occludee_pixels(int f
 
 void CubeDepthBuffer::demand(const Aabb& box) {
   const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
-  if (demand_.empty()) {
-    demand_.assign(depth_.size(), 0);
-    std::fill(tile_max_.begin(), tile_max_.end(), -kFar);  // no pixel wanted yet
+  if (!demanding_) {
+    demanding_ = true;
+    fill_maxima(-kFar);  // no pixel wanted yet
   }
   if (max_norm_distance(lo, hi) <= 0.0) return;  // never hidden: reads nothing
   for (int face = 0; face < 6; ++face)
     if (const auto r = occludee_pixels(face, lo, hi)) {
-      for (int j = r->j0; j <= r->j1; ++j)
-        std::fill_n(demand_.begin() + ptrdiff_t((size_t(face) * n_ + j) * n_ + r->i0), r->i1 - r->i0 + 1, 1);
       // No occluder is rendered yet, so a tile with a wanted pixel has +inf as its largest depth.
       for (int tj = r->j0 / kTile; tj <= r->j1 / kTile; ++tj)
-        for (int ti = r->i0 / kTile; ti <= r->i1 / kTile; ++ti) tile_max_[tile_index(face, ti, tj)] = kFar;
+        for (int ti = r->i0 / kTile; ti <= r->i1 / kTile; ++ti) {
+          make_live(face, ti, tj);
+          set_tile_max(face, ti, tj, kFar);
+        }
+      for (int j = r->j0; j <= r->j1; ++j)
+        std::fill_n(demand_.begin() + ptrdiff_t((size_t(face) * n_ + j) * n_ + r->i0), r->i1 - r->i0 + 1, 1);
     }
 }
 
 // An occluder inside the box writes a pixel only where the rays through its corners meet the
 // occluder, at points of the box in the face's pyramid: inside the rectangle occludee_pixels
 // gives, at depths >= its `near`. A pixel no deeper than that keeps its depth (add_to_face
-// skips it). Tiles whose wanted pixels all are that near are passed over whole, the others
-// pixel by pixel.
+// skips it). Tiles whose wanted pixels all are that near are passed over whole; a tile inside
+// the rectangle with a wanted pixel deeper answers at once (its largest depth is one such
+// pixel); the others are read pixel by pixel.
 bool CubeDepthBuffer::may_lower(const Aabb& box) const {
   const glm::dvec3 lo = glm::dvec3(box.min) - eye_, hi = glm::dvec3(box.max) - eye_;
   if (max_norm_distance(lo, hi) <= 0.0) return true;
@@ -227,13 +297,17 @@ bool CubeDepthBuffer::may_lower(const Aabb& box) const {
     const auto r = occludee_pixels(face, lo, hi);
     if (!r) continue;
     const float* pixels = depth_.data() + size_t(face) * n_ * n_;
-    for (int tj = r->j0 / kTile; tj <= r->j1 / kTile; ++tj)
-      for (int ti = r->i0 / kTile; ti <= r->i1 / kTile; ++ti) {
-        if (!(double(tile_max_[tile_index(face, ti, tj)]) > r->near)) continue;
-        for (int j = std::max(r->j0, tj * kTile); j <= std::min(r->j1, (tj + 1) * kTile - 1); ++j)
-          for (int i = std::max(r->i0, ti * kTile); i <= std::min(r->i1, (ti + 1) * kTile - 1); ++i)
-            if (double(pixels[size_t(j) * n_ + i]) > r->near && wanted(face, i, j)) return true;
-      }
+    const bool lowers = tiles_deeper_than(face, r->i0, r->i1, r->j0, r->j1, r->near, [&](int ti, int tj) {
+      const int i0 = std::max(r->i0, ti * kTile), i1 = std::min(r->i1 + 1, tile_end(ti));
+      const int j0 = std::max(r->j0, tj * kTile), j1 = std::min(r->j1 + 1, tile_end(tj));
+      const bool whole = i0 == ti * kTile && i1 == tile_end(ti) && j0 == tj * kTile && j1 == tile_end(tj);
+      if (whole || !live(face, ti, tj)) return true;  // not live: all wanted, all +inf
+      for (int j = j0; j < j1; ++j)
+        for (int i = i0; i < i1; ++i)
+          if (double(pixels[size_t(j) * n_ + i]) > r->near && wanted(face, i, j)) return true;
+      return false;
+    });
+    if (lowers) return true;
   }
   return false;
 }
@@ -245,15 +319,26 @@ bool CubeDepthBuffer::hidden(const Aabb& box) const {
     const auto r = occludee_pixels(face, lo, hi);
     if (!r) continue;
     const float* pixels = depth_.data() + size_t(face) * n_ * n_;
-    for (int j = r->j0; j <= r->j1; ++j)
-      for (int i = r->i0; i <= r->i1; ++i)
-        if (!(double(pixels[size_t(j) * n_ + i]) < r->near)) return false;
+    for (int tj = r->j0 / kTile; tj <= r->j1 / kTile; ++tj)
+      for (int ti = r->i0 / kTile; ti <= r->i1 / kTile; ++ti) {
+        if (!live(face, ti, tj)) return false;  // its pixels are +inf
+        for (int j = std::max(r->j0, tj * kTile); j < std::min(r->j1 + 1, tile_end(tj)); ++j)
+          for (int i = std::max(r->i0, ti * kTile); i < std::min(r->i1 + 1, tile_end(ti)); ++i)
+            if (!(double(pixels[size_t(j) * n_ + i]) < r->near)) return false;
+      }
   }
   return true;
 }
 
+float CubeDepthBuffer::depth(int face, int i, int j) const {
+  return live(face, i / kTile, j / kTile) ? depth_[(size_t(face) * n_ + j) * n_ + i] : kFar;
+}
+
 double CubeDepthBuffer::covered_fraction() const {
-  const auto covered = std::count_if(depth_.begin(), depth_.end(), [](float d) { return d != kFar; });
+  size_t covered = 0;
+  for (int face = 0; face < 6; ++face)
+    for (int j = 0; j < n_; ++j)
+      for (int i = 0; i < n_; ++i) covered += depth(face, i, j) != kFar;
   return double(covered) / double(depth_.size());
 }
 

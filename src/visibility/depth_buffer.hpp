@@ -7,6 +7,7 @@
 // thesis §5.5.2 (the six faces of a cube around the viewpoint).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -21,6 +22,11 @@ class CubeDepthBuffer {
  public:
   // REQUIRES: resolution >= 1 (pixels per face side).
   CubeDepthBuffer(const Vec3& eye, int resolution);
+
+  // Makes this buffer answer as a new one around `eye` would, keeping its storage: a cell's
+  // refinement needs up to 85 buffers, and clearing 6 whole faces for each cost more than
+  // what they are used for. Only the tiles used since are cleared, when first touched.
+  void aim(const Vec3& eye);
 
   // Limits later rendering to the pixels hidden(box) reads, summed over calls: rendering is
   // the cost, and only pixels some occludee is tested against can change an answer. Without
@@ -52,6 +58,10 @@ class CubeDepthBuffer {
   // Fraction of the sphere's pixels with an occluder, for reports.
   double covered_fraction() const;
 
+  // A pixel's depth: the nearest occluder depth rendered there, +inf where none. Pixels not
+  // wanted by demand() are not rendered. REQUIRES: 0 <= face < 6, 0 <= i, j < resolution.
+  float depth(int face, int i, int j) const;
+
   // Entry and exit depths of the rays through a pixel's two edges into one slab (add_to_face),
   // valid for the add_to_face call whose stamp it carries.
   struct Span {
@@ -60,24 +70,50 @@ class CubeDepthBuffer {
   };
 
  private:
-  static constexpr int kTile = 8;  // pixels per side of a tile
+  static constexpr int kTile = 8;   // pixels per side of a tile
+  static constexpr int kGroup = 8;  // tiles per side of a group
 
   glm::dvec3 eye_;
   int n_;
   int tiles_;                     // per face side
-  std::vector<float> depth_;      // 6 faces of n × n, +inf where no occluder covers the pixel
-  std::vector<uint8_t> demand_;   // empty (all pixels) or 1 per pixel hidden() may read
+  // 6 faces of n × n, +inf where no occluder covers the pixel. Valid in live tiles only.
+  std::vector<float> depth_;
+  std::vector<uint8_t> demand_;   // 1 per pixel hidden() may read; live tiles, demanding_ only
+  bool demanding_ = false;        // demand() was called since aim(): else every pixel is wanted
   // Per tile, the largest depth of its wanted pixels (-inf if none): an occluder no nearer
-  // than that cannot improve the tile, so whole tiles are skipped.
+  // than that cannot improve the tile, so whole tiles are skipped. Valid in every tile.
   std::vector<float> tile_max_;
+  // Per group of kGroup × kGroup tiles, the largest of their tile_max_: the same skipping for
+  // whole groups, so a large box's footprint costs no more than a few reads where it is hidden.
+  std::vector<float> group_max_;
+  int groups_;  // per face side
+  // A tile is live when its tile_epoch_ is epoch_: its pixels were cleared since aim(). A tile
+  // not live reads as all +inf and, while demanding_, unwanted.
+  std::vector<uint32_t> tile_epoch_;
+  uint32_t epoch_ = 0;
   std::vector<Span> columns_, rows_;  // add_to_face's scratch, per pixel column and row
   uint64_t stamp_ = 0;                // add_to_face calls so far
 
+  // REQUIRES: the pixel's tile is live.
   bool wanted(int face, int i, int j) const {
-    return demand_.empty() || demand_[(size_t(face) * n_ + j) * n_ + i] != 0;
+    return !demanding_ || demand_[(size_t(face) * n_ + j) * n_ + i] != 0;
   }
   size_t tile_index(int face, int ti, int tj) const { return (size_t(face) * tiles_ + tj) * tiles_ + ti; }
+  size_t group_index(int face, int ti, int tj) const {
+    return (size_t(face) * groups_ + tj / kGroup) * groups_ + ti / kGroup;
+  }
+  void set_tile_max(int face, int ti, int tj, float largest);
+  void fill_maxima(float value);
+  // Calls visit(ti, tj) for each tile meeting the pixel rectangle [i0, i1] × [j0, j1] of the
+  // face whose largest wanted depth exceeds `above`, until visit returns true; returns
+  // whether it did. visit may lower the tiles' maxima (set_tile_max).
+  template <class Visit>
+  bool tiles_deeper_than(int face, int i0, int i1, int j0, int j1, double above, Visit&& visit) const;
+  bool live(int face, int ti, int tj) const { return tile_epoch_[tile_index(face, ti, tj)] == epoch_; }
+  void make_live(int face, int ti, int tj);  // clears the tile's pixels if it is not live
   void update_tile(int face, int ti, int tj);
+  // One past the last pixel of tile t along a face side.
+  int tile_end(int t) const { return std::min(n_, (t + 1) * kTile); }
 
   struct PixelRect {
     int i0, i1, j0, j1;  // inclusive

@@ -503,6 +503,41 @@ bool segment_meets_box(const Vec3& a, const Vec3& b, const Aabb& box) {
   return true;
 }
 
+namespace {
+double largest_magnitude(const Vec3& lo, const Vec3& hi) {
+  const Vec3 m = glm::max(glm::abs(lo), glm::abs(hi));
+  return double(std::max({m.x, m.y, m.z}));
+}
+}  // namespace
+
+SegmentFilter::SegmentFilter(const Vec3& a, const Vec3& b) : from_(a) {
+  const glm::dvec3 d = glm::dvec3(b) - from_;
+  for (int axis = 0; axis < 3; ++axis) {
+    moves_[axis] = d[axis] != 0.0;
+    inverse_[axis] = moves_[axis] ? 1.0 / d[axis] : 0.0;
+  }
+  pad_ = 1e-6 * largest_magnitude(a, b) + 1e-9;
+}
+
+// A box of coordinates much larger than the segment's gets a larger pad from its own.
+bool SegmentFilter::may_meet(const Aabb& box) const {
+  const double pad = pad_ + 1e-6 * largest_magnitude(box.min, box.max);
+  double t0 = 0.0, t1 = 1.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double lo = double(box.min[axis]) - pad, hi = double(box.max[axis]) + pad;
+    if (!moves_[axis]) {
+      if (from_[axis] < lo || from_[axis] > hi) return false;
+      continue;
+    }
+    double near = (lo - from_[axis]) * inverse_[axis], far = (hi - from_[axis]) * inverse_[axis];
+    if (near > far) std::swap(near, far);
+    t0 = std::max(t0, near);
+    t1 = std::min(t1, far);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
 bool occluder_hides(const Aabb& cell, const Aabb& occluder, const Aabb& occludee) {
   auto corner = [](const Aabb& b, int i) {
     return Vec3(i & 1 ? b.max.x : b.min.x, i & 2 ? b.max.y : b.min.y, i & 4 ? b.max.z : b.min.z);

@@ -51,6 +51,20 @@ std::vector<Aabb> bridge_boxes(const Aabb& a, const Aabb& b);
 // Whether segment a→b meets the closed box (slab test in double precision).
 bool segment_meets_box(const Vec3& a, const Vec3& b, const Aabb& box);
 
+// Segment a→b prepared for many boxes: a cheap filter before segment_meets_box. may_meet
+// holds for every box segment_meets_box(a, b, box) holds for (and for some it misses by a
+// hair): the box is grown by far more than the rounding of either test.
+class SegmentFilter {
+ public:
+  SegmentFilter(const Vec3& a, const Vec3& b);
+  bool may_meet(const Aabb& box) const;
+
+ private:
+  glm::dvec3 from_, inverse_;  // inverse_ of the direction, 0 along an axis it does not move
+  glm::bvec3 moves_;
+  double pad_;                 // grows every box: relative to the coordinates' magnitude
+};
+
 // HDoV §5.5.1 made exact for boxes: `occludee` is hidden from every point of `cell` by the
 // opaque convex `occluder` when all 64 segments from a cell corner to an occludee corner meet
 // the occluder. Why it suffices: for a point q, the viewpoints whose segment to q meets a
