@@ -246,20 +246,30 @@ TEST(CubeDepthBuffer, SkippingAndReaimingChangeNoPixelAndNoAnswer) {
   EXPECT_GT(skipped, 60);  // and the check does skip
 }
 
-TEST(BoxTree, WalkFindsExactlyTheBoxesABruteForceScanFinds) {
-  Random rng(29);
+// Boxes scattered over a 100 × 20 × 100 block, and query boxes among them, for the tree tests.
+std::vector<Aabb> scattered_boxes(Random& rng, int count) {
   std::vector<Aabb> boxes;
-  for (int i = 0; i < 500; ++i) {
+  for (int i = 0; i < count; ++i) {
     const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
     boxes.push_back({c, c + Vec3(float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)))});
   }
+  return boxes;
+}
+
+Aabb random_query(Random& rng) {
+  const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
+  return {c, c + Vec3(float(rng.uniform(1, 20)))};
+}
+
+TEST(BoxTree, WalkFindsExactlyTheBoxesABruteForceScanFinds) {
+  Random rng(29);
+  const std::vector<Aabb> boxes = scattered_boxes(rng, 500);
   const visibility::BoxTree tree(boxes);
   std::vector<int> seen(boxes.size(), 0);
   tree.front_to_back(boxes[0], [](const Aabb&) { return true; }, [&](uint32_t i) { ++seen[i]; });
   EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), ptrdiff_t(boxes.size()));  // each once
   for (int q = 0; q < 50; ++q) {
-    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
-    const Aabb query{c, c + Vec3(float(rng.uniform(1, 20)))};
+    const Aabb query = random_query(rng);
     std::set<uint32_t> found, expected;
     tree.front_to_back(query, [&](const Aabb& group) { return group.overlaps(query); },
                        [&](uint32_t i) { if (boxes[i].overlaps(query)) found.insert(i); });
@@ -273,11 +283,7 @@ TEST(BoxTree, WalkFindsExactlyTheBoxesABruteForceScanFinds) {
 // the new numbers exactly the boxes a brute-force scan finds.
 TEST(BoxTree, RenumberedInLeafOrderBothWalksFindWhatABruteForceScanFinds) {
   Random rng(31);
-  std::vector<Aabb> boxes;
-  for (int i = 0; i < 400; ++i) {
-    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
-    boxes.push_back({c, c + Vec3(float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)), float(rng.uniform(0.1, 8)))});
-  }
+  const std::vector<Aabb> boxes = scattered_boxes(rng, 400);
   visibility::BoxTree tree(boxes);
   const std::vector<uint32_t> old = tree.number_in_leaf_order();
   ASSERT_EQ(old.size(), boxes.size());
@@ -286,8 +292,7 @@ TEST(BoxTree, RenumberedInLeafOrderBothWalksFindWhatABruteForceScanFinds) {
   for (uint32_t o : old) renumbered.push_back(boxes[o]);
   int visited = 0;
   for (int q = 0; q < 50; ++q) {
-    const Vec3 c(float(rng.uniform(0, 100)), float(rng.uniform(0, 20)), float(rng.uniform(0, 100)));
-    const Aabb query{c, c + Vec3(float(rng.uniform(1, 20)))};
+    const Aabb query = random_query(rng);
     std::set<uint32_t> ordered, unordered, expected;
     const auto enter = [&](const Aabb& group) { return group.overlaps(query); };
     tree.front_to_back(query, enter, [&](uint32_t i) { if (renumbered[i].overlaps(query)) ordered.insert(i); });
