@@ -84,8 +84,8 @@ CubeDepthBuffer::CubeDepthBuffer(const Vec3& eye, int resolution)
       depth_(size_t(6) * resolution * resolution),
       demand_(size_t(6) * resolution * resolution),
       tile_max_(size_t(6) * tiles_ * tiles_),
-      group_max_(size_t(6) * ((tiles_ + kGroup - 1) / kGroup) * ((tiles_ + kGroup - 1) / kGroup)),
       groups_((tiles_ + kGroup - 1) / kGroup),
+      group_max_(size_t(6) * groups_ * groups_),
       tile_epoch_(size_t(6) * tiles_ * tiles_, 0),
       columns_(size_t(resolution)),
       rows_(size_t(resolution)) {

@@ -83,10 +83,10 @@ class CubeDepthBuffer {
   // Per tile, the largest depth of its wanted pixels (-inf if none): an occluder no nearer
   // than that cannot improve the tile, so whole tiles are skipped. Valid in every tile.
   std::vector<float> tile_max_;
+  int groups_;  // per face side
   // Per group of kGroup × kGroup tiles, the largest of their tile_max_: the same skipping for
   // whole groups, so a large box's footprint costs no more than a few reads where it is hidden.
   std::vector<float> group_max_;
-  int groups_;  // per face side
   // A tile is live when its tile_epoch_ is epoch_: its pixels were cleared since aim(). A tile
   // not live reads as all +inf and, while demanding_, unwanted.
   std::vector<uint32_t> tile_epoch_;
