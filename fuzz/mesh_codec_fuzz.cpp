@@ -3,8 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/mesh_codec.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/mesh_codec.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   cellwalk::DecodeLimits limits;

@@ -3,8 +3,8 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/import.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/import.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {

@@ -1,6 +1,6 @@
 // libFuzzer target for the camera path reader.
-#include "cellwalk/error.hpp"
-#include "cellwalk/path.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/camera_path.hpp"
 #include "file_fuzz.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <set>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/rtree.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/index/rtree.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace cellwalk;

@@ -1,7 +1,7 @@
 // libFuzzer target for the scene file reader: the trailer, footer, table and every object
 // record must give objects or a cellwalk::Error, never a crash or another exception.
-#include "cellwalk/error.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 #include "file_fuzz.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/hdov_tree.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/systems/visual/hdov_tree.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   using namespace cellwalk;

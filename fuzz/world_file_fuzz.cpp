@@ -1,7 +1,7 @@
 // libFuzzer target for the world file reader: opening, the directory, every level's pages and
 // their decoding must give data or a cellwalk::Error, never a crash or another exception.
-#include "cellwalk/error.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/world.hpp"
 #include "file_fuzz.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

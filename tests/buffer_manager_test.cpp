@@ -1,6 +1,6 @@
 // Tests of MemoryBudget and BufferManager: the budget is never exceeded (peak <= limit), values
 // are the loaded ones, and LRU hit/miss/eviction counts equal an oracle simulation.
-#include "cellwalk/buffer_manager.hpp"
+#include "cellwalk/store/buffer_manager.hpp"
 
 #include <gtest/gtest.h>
 
@@ -8,7 +8,7 @@
 #include <random>
 #include <thread>
 
-#include "cellwalk/memory_budget.hpp"
+#include "cellwalk/store/memory_budget.hpp"
 
 namespace cellwalk {
 namespace {

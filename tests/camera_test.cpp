@@ -1,8 +1,8 @@
-#include "cellwalk/camera.hpp"
+#include "cellwalk/core/camera.hpp"
 
 #include <gtest/gtest.h>
 
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/random.hpp"
 
 namespace cellwalk {
 namespace {

@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <set>
 
-#include "cellwalk/path.hpp"
-#include "cellwalk/random.hpp"
-#include "cellwalk/review.hpp"
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/systems/review/review.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

@@ -15,15 +15,15 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "cellwalk/conservative_visibility.hpp"
-#include "cellwalk/import.hpp"
-#include "cellwalk/lod.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/precompute/conservative_visibility.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/lod/lod.hpp"
+#include "cellwalk/core/random.hpp"
 #include "test_support.hpp"
-#include "visibility/backface_test.hpp"
-#include "visibility/box_tree.hpp"
-#include "visibility/depth_buffer.hpp"
-#include "visibility/occluders.hpp"
+#include "precompute/backface_test.hpp"
+#include "precompute/box_tree.hpp"
+#include "precompute/depth_buffer.hpp"
+#include "precompute/occluders.hpp"
 
 namespace cellwalk {
 namespace {
@@ -33,11 +33,6 @@ using test::TempDir;
 using visibility::CubeDepthBuffer;
 
 Aabb box(Vec3 lo, Vec3 hi) { return {lo, hi}; }
-
-bool contains(const Aabb& outer, const Aabb& inner) {
-  return glm::all(glm::lessThanEqual(outer.min, inner.min)) &&
-         glm::all(glm::greaterThanEqual(outer.max, inner.max));
-}
 
 Object object_of(ObjectId id, Mesh mesh) {
   Object o;
@@ -61,7 +56,7 @@ TEST(Occluders, BoxMeshGivesItselfAsOccluder) {
   const auto found = visibility::inscribed_boxes(box_mesh(b));
   ASSERT_TRUE(found.closed);
   ASSERT_EQ(found.boxes.size(), 1u);
-  EXPECT_TRUE(contains(b, found.boxes[0]));
+  EXPECT_TRUE(b.contains(found.boxes[0]));
   // Faces pushed out to the walls: exactly the box, so abutting boxes touch.
   EXPECT_EQ(found.boxes[0].min, b.min);
   EXPECT_EQ(found.boxes[0].max, b.max);
@@ -121,7 +116,7 @@ TEST(Occluders, AssemblyPartsGiveTheirOwnBoxes) {
   ASSERT_FALSE(found.boxes.empty());
   EXPECT_EQ(found.boxes[0].min, body.min);
   EXPECT_EQ(found.boxes[0].max, body.max);
-  for (const Aabb& b : found.boxes) EXPECT_TRUE(contains(body, b) || b.size().y < 0.5f);
+  for (const Aabb& b : found.boxes) EXPECT_TRUE(body.contains(b) || b.size().y < 0.5f);
 }
 
 TEST(Occluders, BridgesSpanAbuttingBoxes) {

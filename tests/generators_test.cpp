@@ -1,6 +1,6 @@
 // The world generators and their primitive shapes: determinism, streaming, the HDoV thesis's
 // model sizes, navigation graphs that walk on free space, and the generate command.
-#include "cellwalk/generators.hpp"
+#include "cellwalk/scene/generators.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,9 +12,9 @@
 #include <set>
 #include <string>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/process_memory.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/process_memory.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 #include "scene/shapes.hpp"
 #include "test_support.hpp"
 

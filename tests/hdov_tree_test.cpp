@@ -7,9 +7,10 @@
 #include <cstring>
 #include <map>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/hdov_tree.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/systems/visual/visual_strategy.hpp"
+#include "cellwalk/core/random.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

@@ -8,8 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/import.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/import.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

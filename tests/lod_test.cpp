@@ -2,7 +2,7 @@
 // search against brute force, chain shape on the bunny, the recorded error against a
 // brute-force geometric oracle in both directions, cache and fetch order, the sloppy
 // fallback, and the choice of a level by pixel error.
-#include "cellwalk/lod.hpp"
+#include "cellwalk/lod/lod.hpp"
 
 #include <gtest/gtest.h>
 #include <meshoptimizer.h>
@@ -15,8 +15,8 @@
 #include <map>
 #include <random>
 
-#include "cellwalk/import.hpp"
-#include "cellwalk/screen_error.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/lod/screen_error.hpp"
 #include "lod/surface_distance.hpp"
 #include "test_support.hpp"
 

@@ -1,7 +1,7 @@
 // Tests of the mesh codec (src/store/mesh_codec.cpp): round trips on the bunny and random
 // meshes within the documented quantisation bound, bytes per triangle, and damaged input
 // (every byte flipped, every truncation) giving Error or a valid mesh.
-#include "cellwalk/mesh_codec.hpp"
+#include "cellwalk/store/mesh_codec.hpp"
 
 #include <gtest/gtest.h>
 
@@ -10,9 +10,9 @@
 #include <cstdio>
 #include <random>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/import.hpp"
-#include "cellwalk/lod.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/lod/lod.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

@@ -1,6 +1,6 @@
 // Tests of PageFile: byte-exact reads against std::ifstream, exact counters, cache-bypass modes,
 // and failures injected through FaultInjectingSource (LevelDB's fault_injection_test idea).
-#include "cellwalk/page_file.hpp"
+#include "cellwalk/store/page_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -11,7 +11,7 @@
 #include <random>
 #include <thread>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

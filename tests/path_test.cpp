@@ -1,10 +1,10 @@
-#include "cellwalk/path.hpp"
+#include "cellwalk/scene/path_generator.hpp"
 
 #include <gtest/gtest.h>
 
 #include <fstream>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

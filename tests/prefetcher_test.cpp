@@ -1,6 +1,6 @@
 // Tests of the Prefetcher: deterministic replay, priority order, cancellation, the in-flight
 // bound, delivery in background mode and shutdown with work queued.
-#include "cellwalk/prefetcher.hpp"
+#include "cellwalk/store/prefetcher.hpp"
 
 #include <gtest/gtest.h>
 

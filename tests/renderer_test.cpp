@@ -1,7 +1,7 @@
 // Tests of the OpenGL renderer on the headless EGL context (llvmpipe): ids and depth, the
 // subset property the fidelity harness relies on, the GPU budget, skipping, determinism, and
 // PNG output.
-#include "cellwalk/renderer.hpp"
+#include "cellwalk/render/renderer.hpp"
 
 #include <epoxy/gl.h>
 #include <gtest/gtest.h>
@@ -16,7 +16,7 @@
 #include <random>
 #include <set>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "render/gpu_mesh_cache.hpp"
 #include "test_support.hpp"
 
@@ -79,7 +79,7 @@ class Meshes {
   MeshProvider provider() {
     return [this](const DrawItem& item) -> const Mesh* {
       ++calls_;
-      auto it = meshes_.find({item.object, item.lod});
+      auto it = meshes_.find({item.id, item.lod});
       return it == meshes_.end() ? nullptr : &it->second;
     };
   }
@@ -191,7 +191,7 @@ TEST_F(RendererTest, SubsetRendersItsObjectsPixelsExactlyAsTheFullList) {
   std::set<uint32_t> subset_ids;
   for (int i = kCount - 1; i >= 0; i -= 2) {  // every other object, in reverse order
     subset.push_back(full[i]);
-    subset_ids.insert(full[i].object + 1);
+    subset_ids.insert(pixel_id(full[i]));
   }
   renderer.render(test_camera(), subset, meshes.provider());
   Image color = renderer.read_color();

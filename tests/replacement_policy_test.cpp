@@ -1,6 +1,6 @@
 // Tests of the replacement policies against a brute-force oracle that computes the victim from
 // each policy's definition (HDoV thesis digest §3.4, §3.11; seeds/003) by scanning every entry.
-#include "cellwalk/replacement_policy.hpp"
+#include "cellwalk/store/replacement_policy.hpp"
 
 #include <gtest/gtest.h>
 

@@ -11,13 +11,13 @@
 #include <optional>
 #include <set>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/path.hpp"
-#include "cellwalk/random.hpp"
-#include "cellwalk/review.hpp"
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
-#include "strategy/review_view_culling.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/path_generator.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/systems/review/review.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
+#include "systems/review/review_view_culling.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -158,7 +158,7 @@ Replay replay(const World& world, const CameraPath& path, const std::string& nam
     std::set<ObjectId> drawn;
     for (const DrawItem& item : items) {
       EXPECT_NE(s.mesh(item, stats), nullptr);
-      drawn.insert(item.object);
+      drawn.insert(item.id);
     }
     const ConvexCell h = review::frustum_cell(camera, float(s.config().depth));
     // Boxes within a centimetre of the frustum's surface may go either way in floating point.
@@ -288,7 +288,7 @@ TEST(ReviewStrategy, ADiskCellLargerThanTheBufferKeepsTheObjectsNearestTheViewer
     ASSERT_EQ(s.queries().size(), 1u) << name;
     ASSERT_GT(s.queries().front().dropped, 0u) << name << ": the buffer must be too small for the cell";
     std::set<ObjectId> drawn;
-    for (const DrawItem& item : items) drawn.insert(item.object);
+    for (const DrawItem& item : items) drawn.insert(item.id);
     const ConvexCell h = review::frustum_cell(camera, float(s.config().depth));
     float farthest_drawn = 0.0f, nearest_missing = std::numeric_limits<float>::max();
     for (ObjectId id = 0; id < world.object_count(); ++id) {

@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <set>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/page_file.hpp"
-#include "cellwalk/random.hpp"
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/page_file.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
 #include "index/linear_split.hpp"
 #include "test_support.hpp"
 

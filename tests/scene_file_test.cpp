@@ -1,4 +1,4 @@
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 
 #include <gtest/gtest.h>
 
@@ -6,8 +6,8 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/random.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

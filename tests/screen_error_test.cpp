@@ -1,7 +1,7 @@
 // Tests of the screen-space error (src/lod/screen_error.cpp): known values, monotonicity,
 // box distances, and the per-view-cell bound against an oracle that projects small vectors
 // with the camera's own matrices from sampled viewpoints and view directions.
-#include "cellwalk/screen_error.hpp"
+#include "cellwalk/lod/screen_error.hpp"
 
 #include <gtest/gtest.h>
 

@@ -6,8 +6,8 @@
 
 #include <set>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/random.hpp"
 
 namespace cellwalk::visibility {
 namespace {

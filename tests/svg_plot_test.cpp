@@ -1,10 +1,10 @@
-#include "metrics/svg_plot.hpp"
+#include "experiments/common/svg_plot.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 namespace {

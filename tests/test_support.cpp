@@ -72,9 +72,9 @@ CommandResult run_cellwalk(const std::string& args) {
 
 }  // namespace cellwalk::test
 
-#include "cellwalk/random.hpp"
-#include "cellwalk/scene_file.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/scene/scene_file.hpp"
+#include "cellwalk/store/world.hpp"
 
 namespace cellwalk::test {
 

@@ -41,8 +41,8 @@ CommandResult run_cellwalk(const std::string& args);
 
 }  // namespace cellwalk::test
 
-#include "cellwalk/mesh.hpp"
-#include "cellwalk/scene.hpp"
+#include "cellwalk/scene/mesh.hpp"
+#include "cellwalk/scene/scene.hpp"
 
 namespace cellwalk::test {
 

@@ -1,16 +1,16 @@
 // Tests of the view-cell partitions (grid, octree with vLOD's rules, k-d after the stratified
 // thesis): point location, face neighbours across levels, solid cells, stored form.
-#include "cellwalk/view_cell.hpp"
+#include "cellwalk/visibility/view_cell.hpp"
 
 #include <gtest/gtest.h>
 
 #include <map>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/random.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/store/world.hpp"
 #include "test_support.hpp"
-#include "visibility/embree_scene.hpp"
+#include "precompute/embree_scene.hpp"
 
 namespace cellwalk {
 namespace {

@@ -10,9 +10,9 @@
 #include <set>
 #include <sys/wait.h>
 
-#include "cellwalk/world.hpp"
+#include "cellwalk/store/world.hpp"
 
-#include "cellwalk/path.hpp"
+#include "cellwalk/scene/path_generator.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {

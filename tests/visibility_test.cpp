@@ -7,13 +7,13 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/random.hpp"
-#include "cellwalk/visibility.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/precompute/engine.hpp"
 #include "test_support.hpp"
-#include "visibility/dov_engine.hpp"
-#include "visibility/ground_truth.hpp"
-#include "visibility/pvs_builder.hpp"
+#include "precompute/dov_engine.hpp"
+#include "precompute/ground_truth.hpp"
+#include "precompute/pvs_builder.hpp"
 #include "visibility/set_codec.hpp"
 
 namespace cellwalk {

@@ -1,5 +1,8 @@
-#include "cellwalk/walk.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/metrics/fidelity.hpp"
+#include "cellwalk/metrics/walk_summary.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/scene/path_generator.hpp"
+#include "cellwalk/store/world.hpp"
 
 #include <gtest/gtest.h>
 
@@ -9,7 +12,7 @@
 #include <set>
 #include <nlohmann/json.hpp>
 
-#include "strategy/brute.hpp"
+#include "systems/brute/brute.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -22,7 +25,7 @@ class DroppingStrategy : public BruteStrategy {
   std::string name() const override { return "dropping"; }
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override {
     BruteStrategy::select(camera, items, stats);
-    std::erase_if(items, [&](const DrawItem& i) { return i.object == dropped_; });
+    std::erase_if(items, [&](const DrawItem& i) { return i.id == dropped_; });
   }
 
  private:

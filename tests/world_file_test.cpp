@@ -1,4 +1,4 @@
-#include "cellwalk/world.hpp"
+#include "cellwalk/store/world.hpp"
 
 #include <gtest/gtest.h>
 
@@ -6,10 +6,10 @@
 #include <fstream>
 #include <thread>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/geometry_store.hpp"
-#include "cellwalk/random.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/geometry_store.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -182,7 +182,7 @@ TEST_F(BuiltWorld, StoreNeverExceedsItsBudget) {
   ASSERT_LT(budget, world.resident_bytes() + total / 3);
   GeometryStore store(world, budget);
   Random rng(4);
-  FrameStats stats;
+  FetchStats stats;
   for (int i = 0; i < 500; ++i) {
     const ObjectId id = static_cast<ObjectId>(rng.integer(0, static_cast<int64_t>(world.object_count()) - 1));
     auto mesh = store.get(id, 0, EntryMeta{}, stats);

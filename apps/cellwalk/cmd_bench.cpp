@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "metrics/store_bench.hpp"
+#include "experiments/store/store_report.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -77,7 +77,7 @@ void register_bench(CLI::App& root) {
       root.add_subcommand("bench", "Measure a component and write its report under docs/results/");
   bench->require_subcommand(1);
   register_store(*bench);
-  register_bench_hdov_tree(*bench, command_line);
+  register_bench_scene_tree(*bench, command_line);
   register_bench_review(*bench, command_line);
   register_bench_visual(*bench, command_line);
   register_bench_visibility(*bench, command_line);

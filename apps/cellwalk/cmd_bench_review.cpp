@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "metrics/review_bench.hpp"
+#include "experiments/review/review_report.hpp"
 
 namespace cellwalk::app {
 

@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "metrics/visibility_bench.hpp"
+#include "experiments/visibility/visibility_report.hpp"
 
 namespace cellwalk::app {
 

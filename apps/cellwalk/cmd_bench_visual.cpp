@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "commands.hpp"
-#include "metrics/visual_bench.hpp"
+#include "experiments/visual/visual_report.hpp"
 
 namespace cellwalk::app {
 

@@ -4,8 +4,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 

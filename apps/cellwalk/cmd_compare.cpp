@@ -3,12 +3,15 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/walk.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/metrics/fidelity.hpp"
+#include "cellwalk/metrics/walk_summary.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/store/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
-#include "metrics/bench_support.hpp"
+#include "experiments/common/bench_support.hpp"
 #include "replay_options.hpp"
 
 namespace cellwalk::app {
@@ -32,9 +35,10 @@ nlohmann::ordered_json labelled_json(const std::string& label, const FidelitySum
 
 std::string psnr_text(double db) { return std::isfinite(db) ? bench::fixed(db, 1) : "inf (identical)"; }
 
-NamedFidelity compare_one(const CompareArgs& args, const World& world, const CameraPath& path, const std::string& name,
-                          const std::string& label) {
-  auto strategy = make_strategy(name, world, args.strategy_options());
+NamedFidelity compare_one(const CompareArgs& args, const World& world, const CameraPath& path,
+                          ReplayOptions::Run& run) {
+  const std::string& label = run.label;
+  const std::unique_ptr<Strategy> strategy = std::move(run.strategy);  // released after its run
   auto truth = make_strategy("ground-truth", world, {});
   Renderer renderer(args.lens.render_settings());
   CompareOptions options = args.options;
@@ -84,9 +88,9 @@ void register_compare(CLI::App& root) {
     CameraPath path = read_path(args->path);
     args->make_output_folder();
     auto context = GlContext::headless();
-    const std::vector<std::string> labels = args->labels(world);
+    std::vector<ReplayOptions::Run> made = args->make_runs(world);
     std::vector<NamedFidelity> runs;
-    for (size_t i = 0; i < labels.size(); ++i) runs.push_back(compare_one(*args, world, path, args->strategies[i], labels[i]));
+    for (ReplayOptions::Run& run : made) runs.push_back(compare_one(*args, world, path, run));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const auto& run : runs) all.push_back(labelled_json(run.strategy, run.summary));

@@ -5,9 +5,9 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/generators.hpp"
-#include "cellwalk/import.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/scene/generators.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"

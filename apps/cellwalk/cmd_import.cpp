@@ -8,9 +8,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/import.hpp"
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {

@@ -3,9 +3,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/scene_file.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/scene/scene_file.hpp"
+#include "cellwalk/store/world.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {

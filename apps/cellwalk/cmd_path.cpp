@@ -1,9 +1,9 @@
 // cellwalk path: generate a camera path of one session kind on a scene's navigation graph.
 #include <cstdio>
 
-#include "cellwalk/path.hpp"
-#include "cellwalk/scene_file.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/scene/path_generator.hpp"
+#include "cellwalk/scene/scene_file.hpp"
+#include "cellwalk/store/world.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {

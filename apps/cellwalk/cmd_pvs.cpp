@@ -7,12 +7,12 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/visibility.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/precompute/engine.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
-#include "visibility/ground_truth.hpp"
-#include "visibility/pvs_builder.hpp"
+#include "precompute/ground_truth.hpp"
+#include "precompute/pvs_builder.hpp"
 
 namespace cellwalk::app {
 
@@ -29,21 +29,6 @@ struct Args {
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
-}
-
-visibility::PvsRun make_run(const Args& a, const VisibilityEngine& engine) {
-  visibility::PvsRun run;
-  run.engine = engine.name();
-  run.conservative = engine.conservative();
-  const EngineOptions& o = a.options;
-  run.settings = a.cells + " points=" + std::to_string(o.sample_points) + " rays=" + std::to_string(o.rays_per_point) + " aimed=" + std::to_string(o.aimed_rays_per_object) +
-                 " seed=" + std::to_string(o.seed) + " dov=" + std::to_string(o.dov_resolution) +
-                 (run.conservative ? " refine=" + std::to_string(o.refine_levels) : "") +
-                 (o.dov_midpoint_weights ? " midpoint" : "");
-  run.threads = a.threads;
-  if (!a.shard.empty() && std::sscanf(a.shard.c_str(), "%d/%d", &run.shard, &run.shards) != 2)
-    fail("--shard '" + a.shard + "'", "expected i/N, e.g. 0/4");
-  return run;
 }
 
 nlohmann::ordered_json sizes_json(const visibility::PvsSizes& s) {
@@ -118,27 +103,9 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
 }
 
 void run_merge(const Args& a, const World& world) {
-  visibility::CellSets sets;
-  std::unique_ptr<ViewCellPartition> partition;
-  visibility::PvsRun run;
-  std::vector<bool> have;
-  for (const std::string& path : a.merge) {
-    visibility::PvsPart part = visibility::read_pvs_part(path, world);
-    if (!partition) {
-      partition = std::move(part.partition);
-      run = part.run;
-      have.assign(size_t(run.shards), false);
-    } else if (serialize_partition(*part.partition) != serialize_partition(*partition) ||
-               part.run.engine != run.engine || part.run.settings != run.settings || part.run.shards != run.shards) {
-      fail(path, "is a part of a different run than " + a.merge[0]);
-    }
-    if (part.run.shard < 0 || part.run.shard >= run.shards || have[size_t(part.run.shard)])
-      fail(path, "repeats shard " + std::to_string(part.run.shard));
-    have[size_t(part.run.shard)] = true;
-    sets.merge(part.sets);
-  }
+  const visibility::PvsMerge merged = visibility::merge_pvs_parts(a.merge, world);
   const std::string out = a.out.empty() ? a.world : a.out;
-  const visibility::PvsSizes sizes = visibility::write_world_with_pvs(world, out, *partition, sets, run);
+  const visibility::PvsSizes sizes = visibility::write_world_with_pvs(world, out, *merged.partition, merged.sets, merged.run);
   if (a.json) {
     std::printf("%s\n", nlohmann::ordered_json({{"world", out}, {"parts", a.merge.size()}, {"sizes", sizes_json(sizes)}}).dump(2).c_str());
     return;
@@ -153,7 +120,7 @@ void run_compute(const Args& a, const World& world) {
   const visibility::EmbreeScene scene(world);
   const std::unique_ptr<ViewCellPartition> partition = visibility::make_partition(a.cells, world, scene);
   const double setup_s = seconds_since(setup);
-  const visibility::PvsRun run = make_run(a, *engine);
+  const visibility::PvsRun run = visibility::make_pvs_run(*engine, a.cells, a.options, a.shard, a.threads);
   if (a.check > 0) return run_check(a, world, *engine, *partition);
   const bool sharded = run.shards > 1;
   const std::string out = !a.out.empty() ? a.out

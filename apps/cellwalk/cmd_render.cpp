@@ -1,9 +1,10 @@
 // cellwalk render: one picture of a scene, from a path frame or from above.
 #include <cstdio>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/world.hpp"
-#include "cellwalk/walk.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/runtime/walk.hpp"
 #include "commands.hpp"
 #include "lens_options.hpp"
 

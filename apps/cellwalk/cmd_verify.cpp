@@ -2,8 +2,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 

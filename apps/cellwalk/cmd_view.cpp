@@ -1,6 +1,7 @@
 // cellwalk view: the interactive viewer in a window.
-#include "cellwalk/strategy.hpp"
-#include "cellwalk/viewer.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/strategy/strategy.hpp"
+#include "cellwalk/runtime/viewer.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {

@@ -5,7 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/hdov_tree.hpp"
+#include "cellwalk/systems/visual/visual_strategy.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 

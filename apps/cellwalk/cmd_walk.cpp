@@ -3,12 +3,14 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/walk.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/metrics/walk_summary.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/store/world.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
-#include "metrics/bench_support.hpp"
+#include "experiments/common/bench_support.hpp"
 #include "replay_options.hpp"
 
 namespace cellwalk::app {
@@ -16,10 +18,10 @@ namespace {
 
 // One strategy over the path, with a renderer of its own so no strategy inherits another's
 // GPU buffers.
-WalkSummary walk_one(const ReplayOptions& args, const World& world, const CameraPath& path,
-                     const std::string& name, const std::string& label) {
+WalkSummary walk_one(const ReplayOptions& args, const CameraPath& path, ReplayOptions::Run& run) {
   const StrategyOptions options = args.strategy_options();
-  auto strategy = make_strategy(name, world, options);
+  const std::string& label = run.label;
+  const std::unique_ptr<Strategy> strategy = std::move(run.strategy);  // released after its run
   Renderer renderer(args.lens.render_settings());
   Progress progress("walk " + label, path.frames.size());
   auto frames = walk(path, args.lens.lens(), *strategy, renderer,
@@ -69,9 +71,9 @@ void register_walk(CLI::App& root) {
     CameraPath path = read_path(args->path);
     args->make_output_folder();
     auto context = GlContext::headless();
-    const std::vector<std::string> labels = args->labels(world);
+    std::vector<ReplayOptions::Run> made = args->make_runs(world);
     std::vector<WalkSummary> runs;
-    for (size_t i = 0; i < labels.size(); ++i) runs.push_back(walk_one(*args, world, path, args->strategies[i], labels[i]));
+    for (ReplayOptions::Run& run : made) runs.push_back(walk_one(*args, path, run));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const WalkSummary& s : runs) all.push_back(nlohmann::ordered_json::parse(to_json(s)));

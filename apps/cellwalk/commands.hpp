@@ -20,7 +20,7 @@ void register_pvs(CLI::App& root);
 void register_bench(CLI::App& root);
 void register_visual_build(CLI::App& root);
 // Subcommands of `cellwalk bench`, called by register_bench.
-void register_bench_hdov_tree(CLI::App& bench, std::string (*command_line)());
+void register_bench_scene_tree(CLI::App& bench, std::string (*command_line)());
 void register_bench_review(CLI::App& bench, std::string (*command_line)());
 void register_bench_visual(CLI::App& bench, std::string (*command_line)());
 void register_bench_visibility(CLI::App& bench, std::string (*command_line)());

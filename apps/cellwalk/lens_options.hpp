@@ -3,8 +3,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "cellwalk/camera.hpp"
-#include "cellwalk/renderer.hpp"
+#include "cellwalk/core/camera.hpp"
+#include "cellwalk/render/renderer.hpp"
 
 namespace cellwalk::app {
 

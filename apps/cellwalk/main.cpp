@@ -1,7 +1,7 @@
 // cellwalk: interactive walkthroughs of worlds larger than memory. One binary, subcommands.
 #include <cstdio>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "commands.hpp"
 
 int main(int argc, char** argv) {

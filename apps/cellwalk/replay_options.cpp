@@ -5,16 +5,19 @@
 
 namespace cellwalk::app {
 
-std::vector<std::string> ReplayOptions::labels(const World& world) const {
+std::vector<ReplayOptions::Run> ReplayOptions::make_runs(const World& world) const {
+  for (const std::string& given : strategies)
+    if (std::count(strategies.begin(), strategies.end(), given) > 1)
+      fail("--strategy " + given, "given twice; each strategy runs once per command");
+  std::vector<Run> runs;
   std::vector<std::string> names;
-  for (const std::string& given : strategies) names.push_back(make_strategy(given, world, strategy_options())->name());
-  std::vector<std::string> out;
-  for (size_t i = 0; i < strategies.size(); ++i) {
-    if (std::count(strategies.begin(), strategies.end(), strategies[i]) > 1)
-      fail("--strategy " + strategies[i], "given twice; each strategy runs once per command");
-    out.push_back(std::count(names.begin(), names.end(), names[i]) > 1 ? strategies[i] : names[i]);
+  for (const std::string& given : strategies) {
+    runs.push_back({given, "", make_strategy(given, world, strategy_options())});
+    names.push_back(runs.back().strategy->name());
   }
-  return out;
+  for (size_t i = 0; i < runs.size(); ++i)
+    runs[i].label = std::count(names.begin(), names.end(), names[i]) > 1 ? runs[i].name : names[i];
+  return runs;
 }
 
 }  // namespace cellwalk::app

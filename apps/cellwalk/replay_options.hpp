@@ -5,13 +5,15 @@
 #include <CLI/CLI.hpp>
 
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
-#include "cellwalk/strategy.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/strategy/strategy.hpp"
+#include "cellwalk/store/world.hpp"
 #include "lens_options.hpp"
 
 namespace cellwalk::app {
@@ -52,10 +54,16 @@ struct ReplayOptions {
     std::filesystem::create_directories(out, ec);
     if (ec || !std::filesystem::is_directory(out)) fail(out, "cannot create the output folder: " + ec.message());
   }
-  // One label per --strategy, in order: the strategy's own name (its settings spelled out), or,
-  // where two names coincide (REVIEW's settings are not in its name), the text as given. Every
-  // strategy is made once here, so a bad name or a budget a strategy refuses fails before any run.
-  std::vector<std::string> labels(const World& world) const;
+  // One run per --strategy, in order, each strategy made here once, so a bad name or a budget a
+  // strategy refuses fails before any run. A run's label is the strategy's own name (its
+  // settings spelled out), or, where two names coincide (REVIEW's settings are not in its
+  // name), the text as given. Callers release each strategy after its run.
+  struct Run {
+    std::string name;   // as given to --strategy
+    std::string label;
+    std::unique_ptr<Strategy> strategy;
+  };
+  std::vector<Run> make_runs(const World& world) const;
   StrategyOptions strategy_options() const {
     StrategyOptions options;
     options.memory_budget_bytes = static_cast<uint64_t>(budget_mib * 1024 * 1024);

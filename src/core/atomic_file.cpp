@@ -1,4 +1,4 @@
-#include "cellwalk/atomic_file.hpp"
+#include "cellwalk/core/atomic_file.hpp"
 
 #include <fcntl.h>
 #include <unistd.h>
@@ -8,7 +8,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 namespace {

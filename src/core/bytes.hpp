@@ -12,7 +12,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 

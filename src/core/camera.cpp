@@ -1,4 +1,4 @@
-#include "cellwalk/camera.hpp"
+#include "cellwalk/core/camera.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
 

@@ -1,4 +1,4 @@
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 

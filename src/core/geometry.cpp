@@ -1,4 +1,4 @@
-#include "cellwalk/geometry.hpp"
+#include "cellwalk/core/geometry.hpp"
 
 namespace cellwalk {
 

@@ -1,4 +1,4 @@
-#include "cellwalk/process_memory.hpp"
+#include "cellwalk/core/process_memory.hpp"
 
 #include <cstdio>
 #include <cstdlib>

@@ -2,15 +2,10 @@
 // that returns only objects no earlier cell returned, with COverlap ("not completely inside").
 #include <algorithm>
 
-#include "cellwalk/rtree.hpp"
+#include "cellwalk/index/rtree.hpp"
 
 namespace cellwalk {
 namespace {
-
-bool inside(const Aabb& box, const Aabb& cell) {
-  return box.min.x >= cell.min.x && box.min.y >= cell.min.y && box.min.z >= cell.min.z &&
-         box.max.x <= cell.max.x && box.max.y <= cell.max.y && box.max.z <= cell.max.z;
-}
 
 // Fig. 4.5 with an empty history is the plain box search (Guttman's Search).
 void csearch(RTreeNodeCache& cache, uint32_t index, uint32_t depth, const Aabb& box, const Aabb& cell,
@@ -31,7 +26,7 @@ void csearch(RTreeNodeCache& cache, uint32_t index, uint32_t depth, const Aabb& 
 
 }  // namespace
 
-bool coverlaps(const Aabb& box, const Aabb& cell) { return !inside(box, cell); }
+bool coverlaps(const Aabb& box, const Aabb& cell) { return !cell.contains(box); }
 
 void box_search(RTreeNodeCache& cache, const Aabb& cell, std::vector<uint32_t>& out, SearchCounters& counters) {
   complement_search(cache, cell, {}, out, counters);

@@ -2,9 +2,9 @@
 // logical page-I/O counters"): the header page once, then exactly one verified page per node.
 #include <deque>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
 #include "index/rtree_page.hpp"
 #include "scene/scene_info_codec.hpp"
 

@@ -7,7 +7,7 @@
 #include <utility>
 #include <vector>
 
-#include "cellwalk/rtree.hpp"
+#include "cellwalk/index/rtree.hpp"
 
 namespace cellwalk {
 

@@ -7,9 +7,9 @@
 #include <deque>
 #include <optional>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/rtree.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
 #include "index/linear_split.hpp"
 #include "index/rtree_page.hpp"
 #include "scene/scene_info_codec.hpp"

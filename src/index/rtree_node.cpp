@@ -3,7 +3,7 @@
 // u32 height, u32 entry count, then per entry 6 × f32 box (min, max) and u32 ref, zero padded.
 #include <cmath>
 
-#include "cellwalk/rtree.hpp"
+#include "cellwalk/index/rtree.hpp"
 #include "core/bytes.hpp"
 #include "index/rtree_page.hpp"
 #include "scene/scene_info_codec.hpp"

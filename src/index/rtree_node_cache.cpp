@@ -3,8 +3,8 @@
 // LRU or distance-priority LRU (α = β = γ = 1/3) and the root pinned; or no cache (NC, BOX).
 #include <algorithm>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/rtree.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/index/rtree.hpp"
 
 namespace cellwalk {
 namespace {

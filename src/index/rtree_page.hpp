@@ -4,7 +4,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cellwalk/rtree.hpp"
+#include "cellwalk/index/rtree.hpp"
 #include "core/bytes.hpp"
 
 namespace cellwalk::rtree_page {

@@ -4,7 +4,7 @@
 
 #include <meshoptimizer.h>
 
-#include "cellwalk/lod.hpp"
+#include "cellwalk/lod/lod.hpp"
 
 namespace cellwalk {
 

@@ -10,7 +10,7 @@
 #include <limits>
 #include <numeric>
 
-#include "cellwalk/lod.hpp"
+#include "cellwalk/lod/lod.hpp"
 #include "lod/surface_distance.hpp"
 
 namespace cellwalk {

@@ -1,7 +1,7 @@
 // Screen-space error of LODs from a viewpoint and from a view cell.
 // Seed: 001 vLOD §2.2 (digest §3.2: the corrected per-cell bound, the faithful text behind
 // CellBoundFormula::kFaithful).
-#include "cellwalk/screen_error.hpp"
+#include "cellwalk/lod/screen_error.hpp"
 
 #include <cmath>
 #include <limits>

@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "cellwalk/geometry.hpp"
+#include "cellwalk/core/geometry.hpp"
 
 namespace cellwalk {
 

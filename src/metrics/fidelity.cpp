@@ -7,9 +7,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/error.hpp"
-#include "cellwalk/walk.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/metrics/fidelity.hpp"
+#include "cellwalk/runtime/walk.hpp"
 
 namespace cellwalk {
 

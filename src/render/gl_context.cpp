@@ -10,8 +10,8 @@
 #include <string>
 #include <string_view>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/renderer.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/render/renderer.hpp"
 
 namespace cellwalk {
 namespace {

@@ -9,7 +9,7 @@
 #include <unordered_map>
 #include <utility>
 
-#include "cellwalk/mesh.hpp"
+#include "cellwalk/scene/mesh.hpp"
 
 namespace cellwalk::render {
 
@@ -44,15 +44,17 @@ class GpuMesh {
   uint32_t index_count_ = 0;
 };
 
+// A draw item's kind, id and level (cellwalk/render/renderer.hpp, DrawKind).
 struct MeshKey {
-  ObjectId object = 0;
+  uint32_t id = 0;
   uint32_t lod = 0;
+  uint8_t kind = 0;
   bool operator==(const MeshKey&) const = default;
 };
 
 struct MeshKeyHash {
   size_t operator()(const MeshKey& key) const {
-    return std::hash<uint64_t>()(uint64_t(key.object) << 32 | key.lod);
+    return std::hash<uint64_t>()((uint64_t(key.kind) << 60) ^ (uint64_t(key.id) << 28) ^ key.lod);
   }
 };
 

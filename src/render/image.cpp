@@ -1,11 +1,11 @@
 // PNG output of rendered images, through stb_image_write and the atomic file writer so a failed
 // write never leaves a truncated PNG in place of a good one.
-#include "cellwalk/image.hpp"
+#include "cellwalk/render/image.hpp"
 
 #include <string>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
 
 // Static: other translation units may carry their own copy of stb_image_write.
 #define STB_IMAGE_WRITE_STATIC

@@ -1,6 +1,6 @@
 // The OpenGL 4.5 core renderer: draws a draw list into an offscreen framebuffer (RGBA8 colour,
 // R32UI object id + 1, 32-bit float depth) with the GPU mesh cache in front of the provider.
-#include "cellwalk/renderer.hpp"
+#include "cellwalk/render/renderer.hpp"
 
 #include <epoxy/gl.h>
 
@@ -10,9 +10,10 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <string>
+#include <tuple>
 #include <vector>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "render/gpu_mesh_cache.hpp"
 #include "render/shaders.hpp"
 #include "render/text_overlay.hpp"
@@ -213,14 +214,15 @@ struct Renderer::Impl {
       glVertexAttrib4Nub(render::kColorAttribute, item.color & 0xFF, item.color >> 8 & 0xFF,
                          item.color >> 16 & 0xFF, item.color >> 24);
     }
-    glProgramUniform1ui(program, render::kObjectIdUniform, item.object + 1);
+    glProgramUniform1ui(program, render::kObjectIdUniform, pixel_id(item));
     glDrawElements(GL_TRIANGLES, GLsizei(mesh.index_count()), GL_UNSIGNED_INT,
                    reinterpret_cast<const void*>(uintptr_t(mesh.index_offset())));
   }
 
   // Draws one item from the cache, asking the provider on a miss. Returns false if skipped.
   bool draw_item(const DrawItem& item, const MeshProvider& provider, RenderStats& stats) {
-    const render::MeshKey key{item.object, item.lod};
+    if (item.id >= kMaxPixelId) fail("render", "draw item id " + std::to_string(item.id) + " is past the id buffer's range");
+    const render::MeshKey key{item.id, item.lod, uint8_t(item.kind)};
     const render::GpuMesh* resident = cache.find(key);
     if (resident != nullptr) {
       ++stats.gpu_hits;
@@ -242,12 +244,12 @@ struct Renderer::Impl {
     return true;
   }
 
-  // Ascending (object, lod); stable so equal keys keep the caller's order.
+  // Ascending (kind, id, lod); stable so equal keys keep the caller's order.
   const std::vector<const DrawItem*>& sorted(std::span<const DrawItem> items) {
     order.clear();
     for (const DrawItem& item : items) order.push_back(&item);
     std::stable_sort(order.begin(), order.end(), [](const DrawItem* a, const DrawItem* b) {
-      return a->object != b->object ? a->object < b->object : a->lod < b->lod;
+      return std::tie(a->kind, a->id, a->lod) < std::tie(b->kind, b->id, b->lod);
     });
     return order;
   }
@@ -300,7 +302,7 @@ RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> ite
   const DrawItem* previous = nullptr;
   for (const DrawItem* item : impl_->sorted(items)) {
     if (!impl_->draw_item(*item, provider, stats)) continue;
-    if (previous == nullptr || previous->object != item->object) ++stats.objects;
+    if (previous == nullptr || previous->kind != item->kind || previous->id != item->id) ++stats.objects;
     previous = item;
   }
   glFinish();

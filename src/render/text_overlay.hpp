@@ -5,7 +5,7 @@
 #include <string_view>
 #include <vector>
 
-#include "cellwalk/mesh.hpp"
+#include "cellwalk/scene/mesh.hpp"
 
 namespace cellwalk::render {
 

@@ -1,5 +1,5 @@
 // The GLFW window: a 4.5 core context and its input events forwarded to plain callbacks.
-#include "cellwalk/window.hpp"
+#include "cellwalk/render/window.hpp"
 
 #include <epoxy/gl.h>
 
@@ -7,7 +7,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 namespace {
@@ -109,9 +109,6 @@ void Window::poll_events() {
 }
 void Window::swap_buffers() {
   glfwSwapBuffers(impl_->window);
-}
-void Window::set_title(const std::string& title) {
-  glfwSetWindowTitle(impl_->window, title.c_str());
 }
 bool Window::key_down(int key) const {
   return glfwGetKey(impl_->window, key) == GLFW_PRESS;

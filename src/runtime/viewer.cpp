@@ -1,15 +1,16 @@
 // The interactive viewer. It uses the same frame loop (render_frame) as the headless walk
 // harness, so what a person sees is what the benches measure.
-#include "cellwalk/viewer.hpp"
+#include "cellwalk/runtime/viewer.hpp"
 
 #include <GLFW/glfw3.h>
 
 #include <cmath>
 #include <cstdio>
 
-#include "cellwalk/path.hpp"
-#include "cellwalk/walk.hpp"
-#include "cellwalk/window.hpp"
+#include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/render/window.hpp"
 #include "core/stopwatch.hpp"
 
 namespace cellwalk {

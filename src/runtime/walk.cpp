@@ -1,5 +1,5 @@
 // The frame loop shared by `walk`, `compare`, `view` and every bench: one way to measure.
-#include "cellwalk/walk.hpp"
+#include "cellwalk/runtime/walk.hpp"
 
 #include "core/stopwatch.hpp"
 

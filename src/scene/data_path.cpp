@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "cellwalk/generators.hpp"
+#include "cellwalk/scene/generators.hpp"
 
 namespace cellwalk {
 

@@ -16,7 +16,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "scene/readers.hpp"
 
 namespace cellwalk::detail {

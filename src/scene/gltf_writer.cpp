@@ -9,9 +9,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/error.hpp"
-#include "cellwalk/import.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/import.hpp"
 
 namespace cellwalk {
 

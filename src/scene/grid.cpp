@@ -5,10 +5,10 @@
 #include <cmath>
 #include <string>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/generators.hpp"
-#include "cellwalk/import.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/generators.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/core/random.hpp"
 #include "scene/shapes.hpp"
 
 namespace cellwalk {

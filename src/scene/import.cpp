@@ -1,7 +1,7 @@
 // Model import: format detection, reading files with clear errors, and the dispatch from
 // parse_model to the per-format readers (off_reader.cpp, ply_reader.cpp, obj_reader.cpp,
 // gltf_reader.cpp), plus the steps every reader shares.
-#include "cellwalk/import.hpp"
+#include "cellwalk/scene/import.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -10,7 +10,7 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "scene/readers.hpp"
 
 namespace cellwalk {

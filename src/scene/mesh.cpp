@@ -1,9 +1,9 @@
-#include "cellwalk/mesh.hpp"
+#include "cellwalk/scene/mesh.hpp"
 
 #include <cmath>
 #include <string>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 

@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <string>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/error.hpp"
-#include "cellwalk/import.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/import.hpp"
 
 namespace cellwalk {
 

@@ -7,9 +7,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <string>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/generators.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/generators.hpp"
+#include "cellwalk/core/random.hpp"
 #include "scene/shapes.hpp"
 
 namespace cellwalk {

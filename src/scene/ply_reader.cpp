@@ -9,7 +9,7 @@
 #include <optional>
 #include <string>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "scene/readers.hpp"
 
 namespace cellwalk::detail {

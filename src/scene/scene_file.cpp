@@ -1,5 +1,5 @@
 // The scene file (.cwscene): see docs/format.md, "Scene file".
-#include "cellwalk/scene_file.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -10,8 +10,8 @@
 #include <cstring>
 #include <filesystem>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
 #include "core/bytes.hpp"
 #include "scene/scene_info_codec.hpp"
 

@@ -2,7 +2,7 @@
 // "scene" section (docs/format.md).
 #pragma once
 
-#include "cellwalk/scene.hpp"
+#include "cellwalk/scene/scene.hpp"
 #include "core/bytes.hpp"
 
 namespace cellwalk {

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
-#include "cellwalk/geometry.hpp"
-#include "cellwalk/mesh.hpp"
-#include "cellwalk/scene.hpp"
+#include "cellwalk/core/geometry.hpp"
+#include "cellwalk/scene/mesh.hpp"
+#include "cellwalk/scene/scene.hpp"
 
 namespace cellwalk::shapes {
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/generators.hpp"
-#include "cellwalk/random.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/generators.hpp"
+#include "cellwalk/core/random.hpp"
 #include "scene/shapes.hpp"
 
 namespace cellwalk {

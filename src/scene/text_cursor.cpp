@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "scene/readers.hpp"
 
 namespace cellwalk::detail {

@@ -1,10 +1,10 @@
 // BufferManager: budgeted cache with pluggable replacement (HDoV thesis digest §2.1 "Buffer
 // Manager"; §3.4 DPLRU, §3.11 DoV/DT; seeds/003 hybrid cache).
-#include "cellwalk/buffer_manager.hpp"
+#include "cellwalk/store/buffer_manager.hpp"
 
 #include <vector>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 

@@ -1,6 +1,6 @@
-#include "cellwalk/geometry_store.hpp"
+#include "cellwalk/store/geometry_store.hpp"
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "core/stopwatch.hpp"
 
 namespace cellwalk {
@@ -47,7 +47,7 @@ GeometryStore::~GeometryStore() {
   budget_.release(directory_bytes_);
 }
 
-std::shared_ptr<const Mesh> GeometryStore::get(ObjectId id, uint32_t level, const EntryMeta& meta, FrameStats& stats) {
+std::shared_ptr<const Mesh> GeometryStore::get(ObjectId id, uint32_t level, const EntryMeta& meta, FetchStats& stats) {
   ItemLoader loader = [&]() -> LoadedItem {
     Stopwatch watch;
     auto bytes = world_.read_level(id, level);

@@ -1,7 +1,7 @@
 // MemoryBudget: a lock-free hard byte budget (DESIGN.md "Out-of-core for real").
-#include "cellwalk/memory_budget.hpp"
+#include "cellwalk/store/memory_budget.hpp"
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 

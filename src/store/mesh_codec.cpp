@@ -2,7 +2,7 @@
 // vertex and index codecs, optional zstd. Layout in docs/lod.md ("Mesh codec").
 // Seed: DESIGN.md world store (000 HDoV thesis §4, 001 vLOD §2.4 keep per-object geometry on
 // disk). Meyer et al. On floating-point normal vectors. 2010 (octahedral encoding).
-#include "cellwalk/mesh_codec.hpp"
+#include "cellwalk/store/mesh_codec.hpp"
 
 #include <meshoptimizer.h>
 #include <zstd.h>

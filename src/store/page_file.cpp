@@ -2,7 +2,7 @@
 // drop-behind to keep the OS page cache out of measurements, and exact counters.
 // DESIGN.md "Out-of-core for real"; HDoV thesis digest §2.1 (Retrieval Engine), §8.2
 // ("bypass the page cache with O_DIRECT or posix_fadvise(DONTNEED)").
-#include "cellwalk/page_file.hpp"
+#include "cellwalk/store/page_file.hpp"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -15,7 +15,7 @@
 #include <algorithm>
 #include <cstdint>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 namespace {

@@ -1,11 +1,11 @@
 // Prefetcher: a priority queue of loads with cancellation, run by worker threads or stepped
 // deterministically between frames (HDoV thesis digest §3.5, §2.1; seeds/003 prioritized
 // prefetching).
-#include "cellwalk/prefetcher.hpp"
+#include "cellwalk/store/prefetcher.hpp"
 
 #include <algorithm>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 
@@ -158,11 +158,6 @@ void Prefetcher::wait_idle() {
 size_t Prefetcher::queued() const {
   std::lock_guard lock(mutex_);
   return queue_.size();
-}
-
-size_t Prefetcher::in_flight() const {
-  std::lock_guard lock(mutex_);
-  return in_flight_;
 }
 
 PrefetchStats Prefetcher::stats() const {

@@ -1,7 +1,7 @@
 // The world's directory: objects and their levels of detail (docs/format.md, "World file").
-#include "cellwalk/world.hpp"
+#include "cellwalk/store/world.hpp"
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "core/bytes.hpp"
 #include "scene/scene_info_codec.hpp"
 #include "store/world_sections.hpp"

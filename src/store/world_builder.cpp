@@ -10,10 +10,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/process_memory.hpp"
-#include "cellwalk/scene_file.hpp"
-#include "cellwalk/world.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/process_memory.hpp"
+#include "cellwalk/scene/scene_file.hpp"
+#include "cellwalk/store/world.hpp"
 #include "core/bytes.hpp"
 #include "core/stopwatch.hpp"
 #include "scene/scene_info_codec.hpp"

@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/page_file.hpp"
-#include "cellwalk/world_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/page_file.hpp"
+#include "cellwalk/store/world_file.hpp"
 #include "core/bytes.hpp"
 #include "store/world_layout.hpp"
 

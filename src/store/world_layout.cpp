@@ -5,7 +5,7 @@
 #include <array>
 #include <cstring>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "core/bytes.hpp"
 
 namespace cellwalk::world_layout {

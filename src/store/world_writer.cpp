@@ -3,9 +3,9 @@
 
 #include <cstring>
 
-#include "cellwalk/atomic_file.hpp"
-#include "cellwalk/error.hpp"
-#include "cellwalk/world_file.hpp"
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/world_file.hpp"
 #include "core/bytes.hpp"
 #include "store/world_layout.hpp"
 

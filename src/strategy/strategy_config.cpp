@@ -4,7 +4,7 @@
 #include <cstdlib>
 #include <sstream>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 

@@ -5,7 +5,7 @@
 
 #include <cmath>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "core/bytes.hpp"
 
 namespace cellwalk::visibility {

@@ -5,7 +5,7 @@
 
 #include <glm/glm.hpp>
 
-#include "cellwalk/view_cell.hpp"
+#include "cellwalk/visibility/view_cell.hpp"
 
 namespace cellwalk::visibility {
 

@@ -4,7 +4,7 @@
 // thesis leaves it open), never y in 2D.
 #include <cmath>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 #include "visibility/cell_tree.hpp"
 
 namespace cellwalk {

@@ -5,7 +5,7 @@
 #include <algorithm>
 #include <iterator>
 
-#include "cellwalk/error.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk::visibility {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "cellwalk/scene.hpp"
+#include "cellwalk/scene/scene.hpp"
 
 namespace cellwalk::visibility {
 

@@ -17,7 +17,7 @@
 #include <cmath>
 #include <limits>
 
-#include "cellwalk/replacement_policy.hpp"
+#include "cellwalk/store/replacement_policy.hpp"
 
 namespace cellwalk {
 

@@ -6,7 +6,7 @@
 // The time unit is the caller's choice (DovTimeClock): accesses to this cache (1, 2, ...; κ·T
 // grows by 1 every 1000 requests), or queries, counted by on_query() (κ·T grows by 1 every 1000
 // searches, the thesis's reading for the HDoV node cache). Ties go to the least recently used.
-#include "cellwalk/replacement_policy.hpp"
+#include "cellwalk/store/replacement_policy.hpp"
 
 namespace cellwalk {
 namespace {

@@ -4,7 +4,7 @@
 //   objects retrieved at the same frame are replaced in order of relevance, lowest first.
 // The frame of an entry is EntryMeta::frame of its latest request; ties in relevance go to the
 // least recently used entry.
-#include "cellwalk/replacement_policy.hpp"
+#include "cellwalk/store/replacement_policy.hpp"
 
 namespace cellwalk {
 namespace {

@@ -2,8 +2,8 @@
 // (seeds/003). A list in access order (front = least recent) and a hash map into it: O(1).
 #include <list>
 
-#include "cellwalk/error.hpp"
-#include "cellwalk/replacement_policy.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/replacement_policy.hpp"
 
 namespace cellwalk {
 namespace {

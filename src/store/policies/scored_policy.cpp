@@ -1,7 +1,7 @@
 // ScoredPolicy: the ordered-set mechanism shared by the DPLRU, DoV, DoV-Time and hybrid policies
 // (HDoV thesis digest §3.11: "a hash map nodeID → nodePtr plus an ordered map list").
-#include "cellwalk/error.hpp"
-#include "cellwalk/replacement_policy.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/replacement_policy.hpp"
 
 namespace cellwalk {
 

@@ -1,0 +1,58 @@
+// Fidelity against ground truth (the full-detail world, no culling): per frame, differing
+// pixels, PSNR and visible objects missed; `compare` replays a path with a strategy and the
+// truth side by side (src/metrics/fidelity.cpp).
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/render/image.hpp"
+#include "cellwalk/render/renderer.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/strategy/strategy.hpp"
+
+namespace cellwalk {
+
+// Fidelity of one rendered frame against ground truth (the full-detail world, no culling).
+struct FidelityFrame {
+  int frame = 0;
+  double differing_fraction = 0.0;  // pixels whose colour differs at all
+  double psnr_db = 0.0;             // over RGB; infinity when identical
+  uint64_t visible_objects = 0;     // distinct ids in the ground-truth id buffer
+  uint64_t missed_objects = 0;      // of those, absent from the strategy's id buffer
+};
+
+struct FidelityImages {
+  Image truth, test, difference;
+};
+
+// Compares two renderings of the same camera. The difference image is 128 + (test - truth)
+// per channel, clamped, as the stratified-rendering thesis shows its errors.
+FidelityFrame compare_images(const Image& truth, const IdImage& truth_ids, const Image& test,
+                             const IdImage& test_ids, Image* difference);
+
+struct CompareOptions {
+  int every = 10;              // compare every k-th frame
+  std::string image_dir;       // if set, writes truth/test/diff PNGs of compared frames
+  int max_images = 10;         // at most this many frames' images
+  std::string label;           // names the images (frameN-LABEL.png); empty: the strategy's name
+};
+
+struct FidelitySummary {
+  size_t frames = 0;
+  double mean_differing_fraction = 0.0, max_differing_fraction = 0.0;
+  double mean_psnr_db = 0.0;  // PSNR of the mean squared error over all frames; infinity if none differ
+  uint64_t visible_objects = 0, missed_objects = 0;
+  double recall = 1.0;        // 1 - missed / visible over all compared frames
+};
+
+std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, Strategy& strategy,
+                                   Strategy& truth, Renderer& renderer,
+                                   const CompareOptions& options, const ProgressFn& progress = {});
+FidelitySummary summarize(const std::vector<FidelityFrame>& frames);
+void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::string& file);
+std::string to_json(const FidelitySummary& summary);
+
+}  // namespace cellwalk

@@ -1,0 +1,55 @@
+// Visibility engines: compute a view cell's visible set (and degrees of visibility) offline.
+// Sampling and DoV cast Embree rays or render cube maps; the conservative engine fuses
+// occluders in a depth buffer (docs/visibility.md, docs/conservative-visibility.md).
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/visibility/view_cell.hpp"
+#include "cellwalk/visibility/visibility.hpp"
+
+namespace cellwalk {
+
+// Thread-safety: compute() may be called concurrently for different cells.
+class VisibilityEngine {
+ public:
+  virtual ~VisibilityEngine() = default;
+  virtual std::string name() const = 0;
+  // True if the engine never drops an object visible from some point of the cell.
+  virtual bool conservative() const = 0;
+  virtual VisibleSet compute(const ViewCell& cell) const = 0;
+};
+
+// ---- Engines that exist (src/precompute/engine_registry.cpp) --------------------------------
+
+struct EngineOptions {
+  // Sampling: rays are cast from corners, face centres, the centre and this many random points
+  // on the faces and inside, each over this many directions spread over the whole sphere.
+  int sample_points = 64;
+  int rays_per_point = 4096;
+  // Sampling: besides the sphere, this many rays from each point at random points of every
+  // object's bounding box. Uniform directions are ~3° apart at 4096 rays, so small distant
+  // objects fall between them; aimed rays find those at a cost linear in the object count.
+  int aimed_rays_per_object = 4;
+  uint64_t seed = 1;
+  // DoV: cube-map face resolution (pixels per side) at each of the cell's 8 corners.
+  int dov_resolution = 256;
+  // DoV: eq. 5.11 at pixel centres as the thesis writes it (its weights sum to 1 - O(1/R²)),
+  // instead of the default, eq. 5.11 integrated over each pixel (weights sum to exactly 1).
+  bool dov_midpoint_weights = false;
+  // Conservative: how many times each cell is refined (halved along its long axes) for
+  // occluder shrinking; more levels hide more and cost more (docs/conservative-visibility.md).
+  int refine_levels = 3;
+};
+
+// Names accepted by make_engine(), e.g. {"sampling", "dov"}.
+std::vector<std::string> engine_names();
+// Throws Error listing engine_names() for an unknown name. The engine keeps a reference to
+// `world`, which must outlive it.
+std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const World& world,
+                                              const EngineOptions& options = {});
+
+}  // namespace cellwalk

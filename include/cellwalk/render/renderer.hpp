@@ -1,0 +1,119 @@
+// The OpenGL 4.5 core renderer: one code path, two ways to get a context (headless EGL on the
+// surfaceless platform, or a GLFW window). Renders a draw list into colour, depth and a
+// per-object id buffer with fixed, deterministic lighting.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "cellwalk/core/camera.hpp"
+#include "cellwalk/render/image.hpp"
+#include "cellwalk/scene/mesh.hpp"
+
+namespace cellwalk {
+
+// A current OpenGL 4.5 core context. Creating one makes it current on the calling thread.
+class GlContext {
+ public:
+  virtual ~GlContext() = default;
+  // Headless: EGL with the surfaceless platform (Mesa llvmpipe without a GPU or X server).
+  // Throws Error saying what is missing (e.g. Mesa's EGL) when no context can be made.
+  static std::unique_ptr<GlContext> headless();
+  virtual std::string renderer_name() const = 0;  // GL_RENDERER
+};
+
+// What a draw item is. Its id means a different thing for each kind; the renderer keys its GPU
+// cache and its draw order on (kind, id, lod), so ids of different kinds never meet.
+enum class DrawKind : uint8_t {
+  kObject = 0,     // an object of the world: id is its ObjectId, lod its level
+  kAggregate = 1,  // an internal LOD of a hierarchy node (HDoV-tree, scene tree): id is the node
+  kFarFace = 2,    // a far-field image on a view cell's face (stratified rendering): id is the face
+  kPatch = 3,      // a view-dependent patch (vsplit DAG): id is the patch
+};
+
+// What to draw: an object at one of its levels of detail, or one of the other kinds above.
+struct DrawItem {
+  uint32_t id = 0;
+  uint32_t lod = 0;
+  Rgba8 color = rgba8(200, 200, 200);  // used when the mesh has no per-vertex colours
+  DrawKind kind = DrawKind::kObject;
+};
+
+// The value an item writes into the id buffer: object id + 1 for objects (0 is the
+// background), and for other kinds a value with the kind in the top 4 bits, which no object's
+// pixel has. REQUIRES: id < kMaxPixelId (objects past it are refused when drawn).
+inline constexpr uint32_t kMaxPixelId = (1u << 28) - 1;
+inline uint32_t pixel_id(const DrawItem& item) { return (uint32_t(item.kind) << 28) | (item.id + 1); }
+
+// Supplies the geometry of a draw item that is not resident on the GPU. The pointer must stay
+// valid until the provider is called again. Returning nullptr skips the item (data not ready).
+using MeshProvider = std::function<const Mesh*(const DrawItem&)>;
+
+// A world-space segment for overlays: frustums and boxes in a bird's-eye view.
+struct LineSegment {
+  Vec3 a{0.0f};
+  Vec3 b{0.0f};
+  Rgba8 color = rgba8(255, 255, 0);
+};
+
+struct RenderStats {
+  uint64_t triangles = 0;
+  uint64_t objects = 0;
+  uint64_t gpu_hits = 0;
+  uint64_t gpu_misses = 0;
+  uint64_t uploaded_bytes = 0;
+  uint64_t gpu_resident_bytes = 0;  // after the frame; never above the budget
+  double ms = 0.0;                  // wall time including glFinish
+};
+
+struct RenderSettings {
+  int width = 640;
+  int height = 480;
+  Rgba8 background = rgba8(178, 204, 230);
+  // Draw a backdrop instead of the flat background: a sky gradient above the horizon and a
+  // ground plane (y = 0) with a faint 10 m grid below it, so a walker sees where the ground
+  // is. Colour only: the id target stays background and depth is untouched.
+  bool backdrop = false;
+  // GPU-side vertex and index buffers are cached under this many bytes (LRU). A mesh larger
+  // than the whole budget is drawn from a transient buffer and not kept.
+  uint64_t gpu_budget_bytes = 512ull << 20;
+};
+
+// REQUIRES: a current GlContext (or window context) on the calling thread for its lifetime.
+class Renderer {
+ public:
+  explicit Renderer(const RenderSettings& settings);
+  ~Renderer();
+
+  // Renders items into the offscreen targets and waits for the GPU, so the time is real.
+  // Items are drawn in ascending (object, lod) order whatever their order in `items`, so any
+  // subset of a list renders its objects' pixels exactly as the full list does.
+  RenderStats render(const Camera& camera, std::span<const DrawItem> items,
+                     const MeshProvider& provider);
+
+  // Overlays, drawn over the colour target of the last render() (so read_color() and present()
+  // include them) without depth test; the id target is left as render() wrote it. Call them
+  // after render(), which clears everything. One-pixel lines (all core profiles guarantee).
+  void draw_lines(const Camera& camera, std::span<const LineSegment> segments);
+  // ASCII text in stb_easy_font's glyphs (about 7 px tall on 12 px lines at scale 1, times
+  // `scale`); (x, y) is the top-left corner in pixels from the image's top-left; '\n' starts
+  // a new line.
+  void draw_text(float x, float y, std::string_view text, Rgba8 color, float scale = 1.0f);
+
+  Image read_color() const;
+  IdImage read_ids() const;
+  // Copies the colour target to the default framebuffer (the window) at its size.
+  void present(int window_width, int window_height) const;
+
+  const RenderSettings& settings() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk

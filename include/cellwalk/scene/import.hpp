@@ -1,0 +1,58 @@
+// Importers for OBJ, PLY, OFF and glTF 2.0 / GLB, and exporters for inspection.
+// Every parser checks what it reads (counts, index ranges, finite coordinates, sizes against
+// the file's length) and throws Error "<file>[:line|@offset]: <problem>"; none crashes on any
+// input (each has a libFuzzer target in fuzz/).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "cellwalk/scene/scene.hpp"
+
+namespace cellwalk {
+
+enum class ModelFormat { kObj, kPly, kOff, kGltf };
+
+// By extension (.obj .ply .off .gltf .glb, case-insensitive); throws Error otherwise.
+ModelFormat format_of(const std::string& file);
+
+// Parses a model held in memory. `name` is used in error messages and object names.
+// glTF files give one object per mesh node (node transforms applied); the others give one
+// object. Objects get ids first_id, first_id + 1, ...; normals are computed when absent.
+std::vector<Object> parse_model(ModelFormat format, std::span<const uint8_t> bytes,
+                                const std::string& name, ObjectId first_id = 0);
+
+// Reads and parses a file (a directory, an empty or unreadable file is an Error).
+std::vector<Object> import_model(const std::string& file, ObjectId first_id = 0);
+
+// Exporters: write the objects they receive; finish() completes the file (written to a
+// temporary name, renamed on finish).
+class ObjWriter : public ObjectSink {
+ public:
+  explicit ObjWriter(std::string path);
+  ~ObjWriter() override;
+  void add(const Object& object) override;
+  void finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// glTF 2.0 with the binary buffer in a ".bin" beside it (or one .glb when path ends in .glb);
+// one mesh and node per object, vertex colours as COLOR_0.
+class GltfWriter : public ObjectSink {
+ public:
+  explicit GltfWriter(std::string path);
+  ~GltfWriter() override;
+  void add(const Object& object) override;
+  void finish();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk

@@ -1,0 +1,59 @@
+// The scene model: a world is a set of objects; an object is an indexed triangle mesh with a
+// bounding box, a stable id, a name and a colour.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cellwalk/core/geometry.hpp"
+
+namespace cellwalk {
+
+using ObjectId = uint32_t;
+
+// Colours are RGBA8 packed little-endian: r | g << 8 | b << 16 | a << 24.
+using Rgba8 = uint32_t;
+constexpr Rgba8 rgba8(uint8_t r, uint8_t g, uint8_t b, uint8_t a = 255) {
+  return uint32_t(r) | uint32_t(g) << 8 | uint32_t(b) << 16 | uint32_t(a) << 24;
+}
+
+// An indexed triangle list. normals and colors are either empty or one per position.
+struct Mesh {
+  std::vector<Vec3> positions;
+  std::vector<Vec3> normals;
+  std::vector<Rgba8> colors;
+  std::vector<uint32_t> indices;  // three per triangle
+
+  size_t vertex_count() const { return positions.size(); }
+  size_t triangle_count() const { return indices.size() / 3; }
+  // Bytes the arrays hold, the measure budgets count.
+  size_t byte_size() const;
+};
+
+struct Object {
+  ObjectId id = 0;
+  std::string name;
+  Rgba8 color = rgba8(200, 200, 200);  // used where the mesh has no per-vertex colours
+  Aabb bounds;
+  Mesh mesh;
+};
+
+// Checks what every consumer relies on: a whole number of triangles, indices in range,
+// finite coordinates, normals/colors empty or one per position. Throws Error naming `where`.
+void validate(const Mesh& mesh, std::string_view where);
+
+// Area-weighted vertex normals; replaces any normals present.
+void compute_normals(Mesh& mesh);
+
+Aabb bounds_of(const Mesh& mesh);
+
+// Applies an affine transform to positions and (inverse-transpose) to normals.
+void transform(Mesh& mesh, const Mat4& m);
+
+// Appends `src` to `dst`, offsetting indices. Normals/colours are kept only if both have them
+// (an empty dst takes src's layout).
+void append(Mesh& dst, const Mesh& src);
+
+}  // namespace cellwalk

@@ -1,0 +1,54 @@
+// The store's geometry cache: decoded levels of detail of a world's objects, read through the
+// world file's verified pages and held in a BufferManager under the run's hard memory budget.
+// The world's directory is reserved in the same budget for as long as the store lives.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "cellwalk/store/buffer_manager.hpp"
+#include "cellwalk/store/fetch_stats.hpp"
+#include "cellwalk/store/world.hpp"
+
+namespace cellwalk {
+
+class GeometryStore {
+ public:
+  // budget_bytes 0 = unlimited; otherwise the directory, the cached meshes and the one level
+  // being read and decoded stay within it together. Throws Error if the budget cannot hold the
+  // directory plus the world's largest level.
+  // policy nullptr = LRU.
+  GeometryStore(const World& world, uint64_t budget_bytes,
+                std::unique_ptr<ReplacementPolicy> policy = nullptr);
+  ~GeometryStore();
+
+  // The decoded mesh of one level; reads and decodes on a miss, adding I/O and decode time,
+  // bytes read, hits and misses to `stats`. A mesh too large for the budget even when
+  // everything else is evicted is returned uncached and counted in resident_bytes() while the
+  // caller holds it.
+  std::shared_ptr<const Mesh> get(ObjectId id, uint32_t level, const EntryMeta& meta, FetchStats& stats);
+
+  // Bytes held now: everything reserved in the budget plus uncached meshes still held.
+  uint64_t resident_bytes() const;
+  // The largest resident_bytes() seen at any get(), counting a load's encoded and decoded bytes
+  // while it is in flight.
+  uint64_t peak_resident_bytes() const { return peak_; }
+  const MemoryBudget& budget() const { return budget_; }
+  BufferManager& buffer() { return *buffer_; }
+  const World& world() const { return world_; }
+
+  static CacheKey key(ObjectId id, uint32_t level) { return (uint64_t(id) << 32) | level; }
+  static ObjectId object_of(CacheKey key) { return static_cast<ObjectId>(key >> 32); }
+
+ private:
+  const World& world_;
+  uint64_t load_headroom_ = 0;  // the largest encoded level plus its decoded size
+  MemoryBudget budget_;         // the caller's budget less load_headroom_
+  uint64_t directory_bytes_ = 0;
+  std::unique_ptr<BufferManager> buffer_;
+  std::weak_ptr<const Mesh> transient_;  // the last uncached mesh handed out
+  uint64_t transient_bytes_ = 0;
+  uint64_t peak_ = 0;
+};
+
+}  // namespace cellwalk

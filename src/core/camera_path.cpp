@@ -1,0 +1,64 @@
+// Camera paths: the text format (docs/paths.md).
+#include "cellwalk/core/camera_path.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/error.hpp"
+
+namespace cellwalk {
+
+namespace {
+constexpr const char* kHeader = "# cellwalk path 1";
+}
+
+CameraPath read_path(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) fail(file, "cannot open path file");
+  CameraPath path;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::string where = file + ":" + std::to_string(number);
+    if (number == 1 && line.rfind("# cellwalk path", 0) != 0)
+      fail(where, "not a cellwalk path file (the first line must be \"" + std::string(kHeader) + "\")");
+    if (line.empty() || line[0] == '#') continue;
+    std::istringstream fields(line);
+    PathFrame f;
+    if (!(fields >> f.time >> f.position.x >> f.position.y >> f.position.z >> f.yaw_deg >> f.pitch_deg))
+      fail(where, "expected 6 numbers: time x y z yaw pitch");
+    std::string extra;
+    if (fields >> extra) fail(where, "unexpected text after the 6 numbers: \"" + extra + "\"");
+    if (!std::isfinite(f.time) || !std::isfinite(f.position.x) || !std::isfinite(f.position.y) ||
+        !std::isfinite(f.position.z) || !std::isfinite(f.yaw_deg) || !std::isfinite(f.pitch_deg))
+      fail(where, "non-finite number");
+    if (!path.frames.empty() && f.time < path.frames.back().time)
+      fail(where, "time goes backwards");
+    path.frames.push_back(f);
+  }
+  if (number == 0) fail(file, "empty path file");
+  if (path.frames.empty()) fail(file, "path has no frames");
+  return path;
+}
+
+void write_path(const CameraPath& path, const std::string& file) {
+  std::ostringstream out;
+  out << kHeader << "\n# time x y z yaw_deg pitch_deg\n";
+  out.precision(9);
+  for (const PathFrame& f : path.frames)
+    out << f.time << ' ' << f.position.x << ' ' << f.position.y << ' ' << f.position.z << ' '
+        << f.yaw_deg << ' ' << f.pitch_deg << '\n';
+  write_file_atomically(file, out.str());
+}
+
+void apply(const PathFrame& frame, Camera& camera) {
+  camera.position = frame.position;
+  camera.yaw_deg = frame.yaw_deg;
+  camera.pitch_deg = frame.pitch_deg;
+}
+
+}  // namespace cellwalk

@@ -1,0 +1,30 @@
+// make_strategy: the one place that knows every strategy by name.
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/systems/visual/visual_strategy.hpp"
+#include "cellwalk/systems/review/review.hpp"
+#include "cellwalk/strategy/strategy.hpp"
+#include "systems/brute/brute.hpp"
+#include "systems/scene_tree/scene_tree_strategy.hpp"
+
+namespace cellwalk {
+
+std::vector<std::string> strategy_names() {
+  return {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]"};
+}
+
+std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& world,
+                                        const StrategyOptions& options) {
+  if (name == "brute") return std::make_unique<BruteStrategy>(world, options, true);
+  if (name == "ground-truth") return std::make_unique<BruteStrategy>(world, options, false);
+  if (name == "conv") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kConv);
+  if (name == "hdov-vsc") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kVsc);
+  if (is_review_strategy_name(name)) return std::make_unique<ReviewStrategy>(world, parse_review_strategy_name(name), options);
+  if (is_visual_strategy_name(name)) return std::make_unique<VisualStrategy>(world, parse_visual_strategy_name(name), options);
+  if (name == "hdov-pb") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kPb);
+  std::string known;
+  for (const auto& n : strategy_names()) known += (known.empty() ? "" : ", ") + n;
+  fail("strategy \"" + name + "\"", "unknown; choose one of " + known);
+}
+
+}  // namespace cellwalk
