@@ -1,0 +1,37 @@
+// A program linked only with the layers a streaming server needs (core, scene, lod, store,
+// index, visibility): no OpenGL, no Embree. The build fails to link it if any of those layers
+// comes to need the renderer or the precompute; tests/CMakeLists.txt also checks its dynamic
+// libraries. It reads what a server would serve: a world's objects and, if stored, its sets.
+#include <cstdio>
+#include <exception>
+
+#include "cellwalk/index/rtree.hpp"
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/visibility/stored_pvs.hpp"
+
+int main(int argc, char** argv) {
+  using namespace cellwalk;
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: %s WORLD.cww\n", argv[0]);
+    return 2;
+  }
+  try {
+    const World world(argv[1]);
+    uint64_t triangles = 0;
+    for (ObjectId id = 0; id < world.object_count(); ++id) triangles += world.lod(id, 0).triangles;
+    std::printf("world %s: %zu objects, %llu triangles at level 0\n", argv[1], size_t(world.object_count()),
+                (unsigned long long)triangles);
+    if (world.file().has_section(visibility::kPvsSection)) {
+      const visibility::StoredPvs pvs(world);
+      uint64_t ids = 0;
+      for (CellId c = 0; c < pvs.partition().cell_count(); ++c)
+        if (auto set = pvs.set(c)) ids += set->objects.size();
+      std::printf("visible sets: %zu cells, %llu ids\n", pvs.partition().cell_count(), (unsigned long long)ids);
+    }
+    if (world.file().has_section(kRTreeSection)) std::printf("r-tree: present\n");
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s\n", e.what());
+    return 1;
+  }
+}
