@@ -156,6 +156,30 @@ TEST_F(RendererTest, NearerObjectWinsTheIdWhateverTheOrder) {
   EXPECT_EQ(id_at(renderer.read_ids(), kWidth / 2, kHeight / 2), 4u);
 }
 
+// An object and an aggregate with the same id are different things: the GPU cache asks for
+// each (a shared key would draw the object's mesh for the aggregate), and the aggregate's
+// pixels carry its kind, so they never count as the object's.
+TEST_F(RendererTest, KindsWithTheSameIdAreCachedAndIdentifiedApart) {
+  const Mesh small = make_box(Vec3(0.0f), Vec3(0.5f));
+  const Mesh large = make_box(Vec3(0.0f, 0.0f, -5.0f), Vec3(3.0f, 3.0f, 1.0f));  // behind it, wider
+  const DrawItem object{5, 0, rgba8(255, 0, 0)};
+  const DrawItem aggregate{5, 0, rgba8(0, 255, 0), DrawKind::kAggregate};
+  int asked_object = 0, asked_aggregate = 0;
+  const MeshProvider provider = [&](const DrawItem& item) -> const Mesh* {
+    if (item.kind == DrawKind::kObject) return ++asked_object, &small;
+    return ++asked_aggregate, &large;
+  };
+  Renderer renderer(settings());
+  for (int frame = 0; frame < 2; ++frame) renderer.render(test_camera(), std::vector{object, aggregate}, provider);
+  EXPECT_EQ(asked_object, 1);
+  EXPECT_EQ(asked_aggregate, 1);
+  const IdImage ids = renderer.read_ids();
+  EXPECT_EQ(id_at(ids, kWidth / 2, kHeight / 2), pixel_id(object));
+  EXPECT_EQ(pixel_id(object), 6u);
+  EXPECT_NE(pixel_id(aggregate), pixel_id(object));
+  EXPECT_EQ(id_at(ids, kWidth / 2 + kWidth / 8, kHeight / 2), pixel_id(aggregate));
+}
+
 // Random overlapping boxes of various tessellations, ids 0..count-1.
 Meshes random_scene(int count, uint32_t seed) {
   std::mt19937 rng(seed);
