@@ -1,4 +1,4 @@
-// libFuzzer target for the HDoV-tree's pages (src/index/hdov_tree_file.cpp, docs/format.md
+// libFuzzer target for the HDoV-tree's pages (src/systems/visual/hdov_tree_file.cpp, docs/format.md
 // "HDoV-tree file"): any bytes must decode as a node page and as a V-page, or give a
 // cellwalk::Error; what decodes must respect the page's bounds. Never a crash or a hang.
 #include <cmath>

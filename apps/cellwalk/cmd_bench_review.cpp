@@ -1,4 +1,4 @@
-// cellwalk bench review: HDoV thesis §4.4 reproduced (src/metrics/review_bench.hpp).
+// cellwalk bench review: HDoV thesis §4.4 reproduced (experiments/review/review_report.hpp).
 #include <cstdio>
 #include <memory>
 

@@ -1,5 +1,5 @@
 // cellwalk bench scene-tree: HDoV thesis ch. 6's Table 6.1 and Figs. 6.4–6.7 (VSC and PB against
-// CONV) with the fidelity of every setting; src/metrics/scene_tree_bench.cpp does the work.
+// CONV) with the fidelity of every setting; experiments/scene_tree/scene_tree_report.cpp does the work.
 #include <cstdio>
 #include <memory>
 #include <nlohmann/json.hpp>

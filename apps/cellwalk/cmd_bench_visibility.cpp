@@ -1,5 +1,5 @@
 // cellwalk bench visibility: the visibility engines of issue 4 measured side by side
-// (src/metrics/visibility_bench.hpp).
+// (experiments/visibility/visibility_report.hpp).
 #include <cstdio>
 #include <memory>
 

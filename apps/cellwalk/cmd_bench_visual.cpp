@@ -1,4 +1,4 @@
-// cellwalk bench visual: HDoV thesis §5.8 reproduced (src/metrics/visual_bench.hpp).
+// cellwalk bench visual: HDoV thesis §5.8 reproduced (experiments/visual/visual_report.hpp).
 #include <cstdio>
 #include <memory>
 

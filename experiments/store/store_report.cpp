@@ -471,7 +471,7 @@ BlockBox block_box(const Aabb& box) {
   return {{box.min.x, box.min.y, box.min.z}, {box.max.x, box.max.y, box.max.z}};
 }
 
-// What the brute-force strategy (src/strategy/brute.cpp) asks the store for on each frame of a
+// What the brute-force strategy (src/systems/brute/brute.cpp) asks the store for on each frame of a
 // generated walk: level 0 of every object whose bounds meet the frustum, in id order.
 std::vector<TraceFrame> record_trace(const World& world, int frames) {
   PathParams path_params;
