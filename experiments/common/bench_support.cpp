@@ -88,9 +88,9 @@ double variance(const std::vector<double>& v) {
   return v.empty() ? 0.0 : s / double(v.size());
 }
 
-std::string md_table(const std::vector<std::string>& header, const Table& rows) {
+std::string md_table(const std::vector<std::string>& header, const Table& rows, Align align) {
   std::string t = joined(header, "| ", " | ", " |\n") + "|";
-  for (size_t i = 0; i < header.size(); ++i) t += "---|";
+  for (size_t i = 0; i < header.size(); ++i) t += align == Align::kDefault ? "---|" : i ? " ---: |" : " --- |";
   t += "\n";
   for (const auto& row : rows) t += joined(row, "| ", " | ", " |\n");
   return t;
@@ -100,6 +100,25 @@ void write_csv(const std::filesystem::path& file, const std::vector<std::string>
   std::string text = joined(header, "", ",", "\n");
   for (const auto& row : rows) text += joined(row, "", ",", "\n");
   write_file_atomically(file.string(), text);
+}
+
+Table csv_cells(const nlohmann::ordered_json& rows) {
+  Table table;
+  for (const auto& row : rows) {
+    std::vector<std::string>& cells = table.emplace_back();
+    for (const auto& cell : row) {
+      if (cell.is_null()) {
+        cells.emplace_back();
+      } else if (!cell.is_string()) {
+        cells.push_back(cell.dump());
+      } else {
+        std::string quoted = "\"";
+        for (char c : cell.get<std::string>()) quoted += c == '"' ? "\"\"" : std::string(1, c);
+        cells.push_back(quoted + "\"");
+      }
+    }
+  }
+  return table;
 }
 
 WorkDir::WorkDir(const std::string& dir, const std::string& name) : owned_(dir.empty()) {

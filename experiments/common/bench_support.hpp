@@ -35,11 +35,19 @@ nlohmann::ordered_json machine_info();
 double mean(const std::vector<double>& v);
 double variance(const std::vector<double>& v);
 
+// How a markdown table aligns its columns: as the renderer likes, or, for a table of figures,
+// the first column (the row's name) left and the figures right.
+enum class Align { kDefault, kFigures };
+
 // A markdown table: a header row, the separator, one line per row.
-std::string md_table(const std::vector<std::string>& header, const Table& rows);
+std::string md_table(const std::vector<std::string>& header, const Table& rows, Align align = Align::kDefault);
 
 // A CSV file (cells written as they are: the caller keeps commas out), written atomically.
 void write_csv(const std::filesystem::path& file, const std::vector<std::string>& header, const Table& rows);
+
+// Rows of JSON values as CSV cells: strings quoted (RFC 4180: inner quotes doubled), numbers as
+// JSON writes them, null empty.
+Table csv_cells(const nlohmann::ordered_json& rows);
 
 // One frame of `s` at `camera` without rendering: the measured time of its select and mesh calls
 // (query, I/O, decode) and the triangles it would draw, which a bench turns into modelled render

@@ -20,13 +20,13 @@
 #include "cellwalk/scene/generators.hpp"
 #include "cellwalk/scene/path_generator.hpp"
 #include "cellwalk/render/renderer.hpp"
-#include "cellwalk/scene/scene_file.hpp"
 #include "cellwalk/visibility/view_cell.hpp"
 #include "cellwalk/precompute/engine.hpp"
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/store/world.hpp"
 #include "core/progress.hpp"
 #include "experiments/common/bench_support.hpp"
+#include "experiments/common/bench_world.hpp"
 #include "experiments/common/svg_plot.hpp"
 #include "systems/scene_tree/scene_tree_strategy.hpp"
 #include "precompute/pvs_builder.hpp"
@@ -56,22 +56,9 @@ constexpr ThesisRow kTable61[] = {{"CONV", 63.66, 136004, 1102},
 // ---- The measured world ------------------------------------------------------------------------
 
 Json make_world(const SceneTreeBenchParams& p, const std::string& scene, const std::string& world_file) {
-  CityParams city;
-  city.objects = p.objects;
-  city.seed = p.seed;
-  {
-    SceneWriter writer(scene);
-    SceneInfo info = generate_city(city, writer);
-    writer.finish(std::move(info));
-  }
-  BuildParams build;
-  build.threads = p.threads;
-  std::unique_ptr<Progress> progress;
-  const BuildReport r = build_world(scene, world_file, build, [&](uint64_t done, uint64_t total) {
-    if (!progress) progress = std::make_unique<Progress>("build", total);
-    progress->update(done);
-  });
-  progress.reset();
+  const BuildReport r = bench::make_bench_world(CityParams{.objects = p.objects, .seed = p.seed},
+                                                {.params = {.threads = p.threads}, .progress_label = "build"}, scene,
+                                                world_file);
   return {{"objects", r.objects}, {"triangles", r.triangles}, {"levels", r.levels}, {"build_seconds", r.seconds}};
 }
 
@@ -463,8 +450,8 @@ std::vector<std::string> reading(const Json& summary) {
   return out;
 }
 
-std::string markdown(const Json& s) {
-  const Json& settings = s["settings"];
+// The header and the Setup section: the world, path, DoV and tree the settings ran on.
+std::string setup_markdown(const Json& s) {
   const Json& w = s["world"];
   const Json& d = s["dov"];
   const Json& t = s["tree"];
@@ -494,31 +481,41 @@ std::string markdown(const Json& s) {
         " triangles; every one smaller than its children's coarsest together: " +
         std::to_string(t["constraint_violations"].get<uint64_t>()) + " violations), built in " +
         fixed(t["seconds"].get<double>(), 1) + " s, tree file " + fixed(t["file_bytes"].get<double>() / 1048576.0, 2) + " MiB.\n\n";
+  return md;
+}
 
-  md += "## Table 6.1, reproduced (same path, one run)\n\n";
+// Table 6.1's columns from the thesis for our setting `name` (the thesis prints η without its 0).
+std::string thesis_cells(const std::string& name) {
+  if (name == "PB(20000)") return "| — | 2.7 | — | — |";
+  for (const ThesisRow& row : kTable61) {
+    std::string ours = row.system;
+    if (const size_t dot = ours.find("(."); dot != std::string::npos) ours.insert(dot + 1, "0");
+    if (ours == name)
+      return "| " + fixed(row.ms, 2) + " | " + fixed(kThesisConvMs / row.ms, 1) + " | " + fixed(row.polygons, 0) +
+             " | " + fixed(row.nodes, 1) + " |";
+  }
+  return "| — | — | — | — |";
+}
+
+std::string table61_markdown(const Json& s) {
+  std::string md = "## Table 6.1, reproduced (same path, one run)\n\n";
   md += "| system | mean frame (ms) | × vs CONV | triangles / frame | nodes visited | thesis frame (ms) | thesis × | thesis polygons | thesis nodes |\n";
   md += "|---|---|---|---|---|---|---|---|---|\n";
-  for (const Json& r : settings) {
+  for (const Json& r : s["settings"]) {
     const std::string name = r["system"];
-    std::string thesis = "| — | — | — | — |";
-    for (const ThesisRow& row : kTable61) {
-      const std::string thesis_name = row.system;
-      const std::string ours = name == "CONV" ? "CONV" : name;
-      if ((thesis_name == "CONV" && ours == "CONV") || (thesis_name == "VSC(.0001)" && ours == "VSC(0.0001)") ||
-          (thesis_name == "VSC(.001)" && ours == "VSC(0.001)") || (thesis_name == "VSC(.01)" && ours == "VSC(0.01)"))
-        thesis = "| " + fixed(row.ms, 2) + " | " + fixed(kThesisConvMs / row.ms, 1) + " | " + fixed(row.polygons, 0) +
-                 " | " + fixed(row.nodes, 1) + " |";
-    }
-    if (name == "PB(20000)") thesis = "| — | 2.7 | — | — |";
     md += "| " + name + " | " + fixed(r["mean_frame_ms"], 1) + " | " + fixed(r["speedup_vs_conv"], 2) + " | " +
-          fixed(r["mean_triangles"], 0) + " | " + fixed(r["mean_nodes_visited"], 1) + " " + thesis + "\n";
+          fixed(r["mean_triangles"], 0) + " | " + fixed(r["mean_nodes_visited"], 1) + " " + thesis_cells(name) + "\n";
   }
   md += "\nFrame time is the whole frame (traversal, VD update on a cell change, geometry fetch, llvmpipe "
         "rendering with glFinish). Each setting replayed the path " + std::to_string(s["params"]["rounds"].get<int>()) +
         " times, the settings interleaved round by round, each pass with a fresh GPU cache; the table shows each "
         "setting's fastest pass (the least disturbed by other load on the shared machine).\n\n";
+  return md;
+}
 
-  md += "## Fidelity of every setting (the speed/quality curve)\n\n";
+std::string fidelity_markdown(const Json& s) {
+  const Json& settings = s["settings"];
+  std::string md = "## Fidelity of every setting (the speed/quality curve)\n\n";
   md += "Against the full-detail world rendered from the same camera, every " +
         std::to_string(s["params"]["fidelity_every"].get<int>()) +
         "th frame. \"Missed\" counts objects of the ground truth's id buffer absent from the setting's; an object drawn "
@@ -536,6 +533,11 @@ std::string markdown(const Json& s) {
           (r["budget"].get<uint64_t>() ? std::to_string(r["frames_over_budget"].get<uint64_t>()) : std::string("—")) + " |\n";
   }
   md += "\n![speed against fidelity](scene-tree/speed_vs_fidelity.svg)\n\n";
+  return md;
+}
+
+std::string markdown(const Json& s) {
+  std::string md = setup_markdown(s) + table61_markdown(s) + fidelity_markdown(s);
   md += "## Figures\n\n";
   md += "Fig. 6.4 (triangles per frame, log scale) and Fig. 6.5 (frame time), VSC against CONV:\n\n";
   md += "![Fig. 6.4](scene-tree/fig6_4_polygons_vsc.svg)\n![Fig. 6.5](scene-tree/fig6_5_frame_time_vsc.svg)\n\n";

@@ -36,6 +36,7 @@
 #include "cellwalk/store/world.hpp"
 #include "core/progress.hpp"
 #include "experiments/common/bench_support.hpp"
+#include "experiments/common/bench_world.hpp"
 #include "experiments/common/svg_plot.hpp"
 
 namespace cellwalk {
@@ -43,10 +44,12 @@ namespace {
 
 using Json = nlohmann::ordered_json;
 using bench::Clock;
+using bench::csv_cells;
 using bench::fixed;
 using bench::machine_info;
 using bench::seconds_since;
 using bench::utc_now;
+using bench::write_csv;
 namespace fs = std::filesystem;
 
 constexpr size_t kRandomReadBytes = 4096;
@@ -74,34 +77,6 @@ double median(std::vector<double> v) {
 
 std::string mib(uint64_t bytes) {
   return fixed(double(bytes) / (1 << 20), 1) + " MiB";
-}
-
-// ---- The measured world ------------------------------------------------------------------------
-
-// Advances a progress line per object on the way into the scene file.
-class ProgressSink : public ObjectSink {
- public:
-  ProgressSink(ObjectSink& next, Progress& progress) : next_(next), progress_(progress) {}
-  void add(const Object& object) override {
-    progress_.update(++objects_);
-    next_.add(object);
-  }
-
- private:
-  ObjectSink& next_;
-  Progress& progress_;
-  uint64_t objects_ = 0;
-};
-
-void generate_city_scene(uint64_t objects, const std::string& scene_file) {
-  CityParams city;
-  city.objects = objects;
-  SceneWriter writer(scene_file);
-  Progress progress("generate city", objects);
-  ProgressSink sink(writer, progress);
-  SceneInfo info = generate_city(city, sink);
-  progress.finish();
-  writer.finish(std::move(info));
 }
 
 // ---- Build in a child process -----------------------------------------------------------------
@@ -140,17 +115,11 @@ std::string read_all(int fd) {
 }
 
 [[noreturn]] void run_build_child(int fd, const std::string& scene, const std::string& world,
-                                  const BuildParams& params, const std::string& label) {
+                                  const bench::WorldBuild& build) {
   std::string message;
   int code = 0;
   try {
-    std::unique_ptr<Progress> progress;
-    const BuildReport r = build_world(scene, world, params, [&](uint64_t done, uint64_t total) {
-      if (!progress) progress = std::make_unique<Progress>(label, total);
-      progress->update(done);
-    });
-    progress.reset();
-    message = to_json(r).dump();
+    message = to_json(bench::build_bench_world(scene, world, build)).dump();
   } catch (const std::exception& e) {
     message = e.what();
     code = 1;
@@ -159,11 +128,15 @@ std::string read_all(int fd) {
   ::_exit(code);  // skips the parent's atexit handlers and static destructors
 }
 
+// The build every world of the bench gets: `params.threads` threads, the default levels.
+bench::WorldBuild world_build(const StoreBenchParams& params, const std::string& progress_label) {
+  return {.params = {.threads = params.threads}, .progress_label = progress_label};
+}
+
 // Runs build_world in a forked child so the VmHWM it reports is the build's own, not this
 // process's (which holds the bench's other data). The child starts with the pages this process
 // has resident at the fork: returned as "baseline_rss_bytes" beside the report.
-Json build_in_child(const std::string& scene, const std::string& world, const BuildParams& params,
-                    const std::string& label) {
+Json build_in_child(const std::string& scene, const std::string& world, const bench::WorldBuild& build) {
   int fds[2];
   if (::pipe(fds) != 0) fail("bench store: build", std::string("pipe: ") + std::strerror(errno));
   std::fflush(stdout);
@@ -173,7 +146,7 @@ Json build_in_child(const std::string& scene, const std::string& world, const Bu
   if (pid < 0) fail("bench store: build", std::string("fork: ") + std::strerror(errno));
   if (pid == 0) {
     ::close(fds[0]);
-    run_build_child(fds[1], scene, world, params, label);
+    run_build_child(fds[1], scene, world, build);
   }
   ::close(fds[1]);
   const std::string message = read_all(fds[0]);
@@ -186,7 +159,7 @@ Json build_in_child(const std::string& scene, const std::string& world, const Bu
   }
   Json report = Json::parse(message);
   report["baseline_rss_bytes"] = baseline;
-  report["threads"] = params.threads;
+  report["threads"] = build.params.threads;
   return report;
 }
 
@@ -617,10 +590,8 @@ Json measure_large(const StoreBenchParams& params, const fs::path& work, const J
   std::fprintf(stderr, "bench store: large city of %llu objects, build estimated at %.0f s\n",
                static_cast<unsigned long long>(params.large_objects),
                large_estimate_seconds(build, params.large_objects));
-  generate_city_scene(params.large_objects, scene);
-  BuildParams build_params;
-  build_params.threads = params.threads;
-  Json report = build_in_child(scene, world, build_params, "build large city");
+  bench::write_generated_scene(CityParams{.objects = params.large_objects}, scene, "generate city");
+  Json report = build_in_child(scene, world, world_build(params, "build large city"));
   report["triangles_per_second"] =
       report["triangles"].get<double>() / std::max(report["seconds"].get<double>(), 1e-9);
   fs::remove(scene);
@@ -629,50 +600,6 @@ Json measure_large(const StoreBenchParams& params, const fs::path& work, const J
 }
 
 // ---- Report files ------------------------------------------------------------------------------
-
-// Strings quoted (RFC 4180: inner quotes doubled), numbers as JSON writes them, null empty.
-void append_csv_cell(std::string& text, const Json& cell) {
-  if (cell.is_null()) return;
-  if (!cell.is_string()) {
-    text.append(cell.dump());
-    return;
-  }
-  text.push_back('"');
-  for (char c : cell.get<std::string>()) {
-    if (c == '"') text.push_back('"');
-    text.push_back(c);
-  }
-  text.push_back('"');
-}
-
-void write_csv(const fs::path& file, const std::vector<std::string>& header, const Json& rows) {
-  std::string text;
-  for (size_t i = 0; i < header.size(); ++i) text.append(i ? "," : "").append(header[i]);
-  text.push_back('\n');
-  for (const Json& row : rows) {
-    for (size_t i = 0; i < row.size(); ++i) {
-      if (i) text.push_back(',');
-      append_csv_cell(text, row[i]);
-    }
-    text.push_back('\n');
-  }
-  write_file_atomically(file.string(), text);
-}
-
-std::string md_table(const std::vector<std::string>& header,
-                     const std::vector<std::vector<std::string>>& rows) {
-  std::string text = "|";
-  for (const std::string& h : header) text += " " + h + " |";
-  text += "\n|";
-  for (size_t i = 0; i < header.size(); ++i) text += i ? " ---: |" : " --- |";
-  text += "\n";
-  for (const auto& row : rows) {
-    text += "|";
-    for (const std::string& cell : row) text += " " + cell + " |";
-    text += "\n";
-  }
-  return text;
-}
 
 LinePlot hit_ratio_plot(const Json& cache) {
   LinePlot plot;
@@ -758,27 +685,34 @@ std::vector<std::string> reading(const Json& s) {
   return out;
 }
 
-std::string build_markdown(const Json& s) {
-  const Json &b = s["build"], &io = s["io"], &d = s["decode"], &c = s["cache"], &large = s["large"];
+// The store's tables are figures: names left, numbers right.
+std::string figures_table(const std::vector<std::string>& header, const bench::Table& rows) {
+  return bench::md_table(header, rows, bench::Align::kFigures);
+}
+
+std::string header_markdown(const Json& s) {
   const Json& m = s["machine"];
-  std::string md = "# Store benchmarks\n\n";
-  md += "Generated " + s["date"].get<std::string>() + " by `" + s["command"].get<std::string>() +
-        "` on " + m["cpu"].get<std::string>() + ", " + std::to_string(m["nproc"].get<int>()) +
-        " cores, " + fixed(m["memory_bytes"].get<double>() / double(1ull << 30), 1) +
-        " GiB, load average " + fixed(m["load_average"].get<double>(), 1) +
-        " at the start. Run the same command to regenerate this page and the CSV/JSON/SVG in "
-        "`store/`. "
-        "Timings are ratios measured side by side in this run (DESIGN.md \"Measuring\"); absolute "
-        "times vary with the machine.\n\n";
-  md += "## Build\n\nA generated city (`generate_city`, " +
-        std::to_string(b["objects"].get<uint64_t>()) + " objects, " +
-        fixed(b["triangles"].get<double>() / 1e6, 2) +
-        " M triangles) built by `build_world` with " + std::to_string(b["threads"].get<int>()) +
-        " thread(s) in a child process, whose VmHWM is the peak below. The references run on the "
-        "same "
-        "objects, read from the same scene file, one thread: `meshopt_simplify` once to 1/2 and "
-        "`build_lod_chain` (every level, no encoding).\n\n";
-  md += md_table(
+  return "# Store benchmarks\n\nGenerated " + s["date"].get<std::string>() + " by `" +
+         s["command"].get<std::string>() + "` on " + m["cpu"].get<std::string>() + ", " +
+         std::to_string(m["nproc"].get<int>()) + " cores, " +
+         fixed(m["memory_bytes"].get<double>() / double(1ull << 30), 1) + " GiB, load average " +
+         fixed(m["load_average"].get<double>(), 1) +
+         " at the start. Run the same command to regenerate this page and the CSV/JSON/SVG in "
+         "`store/`. "
+         "Timings are ratios measured side by side in this run (DESIGN.md \"Measuring\"); absolute "
+         "times vary with the machine.\n\n";
+}
+
+std::string build_markdown(const Json& b) {
+  std::string md = "## Build\n\nA generated city (`generate_city`, " +
+                   std::to_string(b["objects"].get<uint64_t>()) + " objects, " +
+                   fixed(b["triangles"].get<double>() / 1e6, 2) +
+                   " M triangles) built by `build_world` with " + std::to_string(b["threads"].get<int>()) +
+                   " thread(s) in a child process, whose VmHWM is the peak below. The references run on the "
+                   "same "
+                   "objects, read from the same scene file, one thread: `meshopt_simplify` once to 1/2 and "
+                   "`build_lod_chain` (every level, no encoding).\n\n";
+  md += figures_table(
       {"Stage", "M triangles/s", "× meshopt_simplify"},
       {{"meshopt_simplify once to 1/2",
         fixed(b["simplify_triangles_per_second"].get<double>() / 1e6, 3), "1.000"},
@@ -791,42 +725,53 @@ std::string build_markdown(const Json& s) {
         std::to_string(b["levels"].get<uint64_t>()) + " levels, " +
         fixed(b["level0_bytes"].get<double>() / b["triangles"].get<double>(), 2) +
         " bytes/triangle at level 0, file " + mib(b["file_bytes"]) + ".\n\n";
-  md += "## A 10^8-triangle city\n\n";
-  if (large.value("run", true)) {
-    md += md_table({"Objects", "Triangles", "Build time", "M triangles/s", "Peak RSS"},
-                   {{std::to_string(large["objects"].get<uint64_t>()),
-                     fixed(large["triangles"].get<double>() / 1e6, 1) + " M",
-                     fixed(large["seconds"].get<double>(), 0) + " s",
-                     fixed(large["triangles_per_second"].get<double>() / 1e6, 3),
-                     mib(large["peak_rss_bytes"])}});
-    md += "\nTarget: under 2 GiB peak RSS.\n\n";
-  } else {
-    md += "Not run in this report (add `--large`: generates a " +
-          std::to_string(large["objects"].get<uint64_t>()) +
-          "-object city and builds it in a child process). At the build rate measured above it "
-          "would take about " +
-          fixed(large["estimated_seconds"].get<double>() / 60, 0) + " minutes.\n\n";
-  }
-  md += "## Reads\n\nThe world's geometry section, page cache bypassed (store: " +
-        io["store_mode"].get<std::string>() + ", reference: " + io["raw_mode"].get<std::string>() +
-        "), " + std::to_string(s["params"]["io_rounds"].get<int>()) +
-        " interleaved rounds; the ratio is the median over rounds of raw time / method time (1 = "
-        "as fast as the device path).\n\n";
-  std::vector<std::vector<std::string>> io_rows;
+  return md;
+}
+
+std::string large_markdown(const Json& large) {
+  std::string md = "## A 10^8-triangle city\n\n";
+  if (!large.value("run", true))
+    return md + "Not run in this report (add `--large`: generates a " +
+           std::to_string(large["objects"].get<uint64_t>()) +
+           "-object city and builds it in a child process). At the build rate measured above it "
+           "would take about " +
+           fixed(large["estimated_seconds"].get<double>() / 60, 0) + " minutes.\n\n";
+  md += figures_table({"Objects", "Triangles", "Build time", "M triangles/s", "Peak RSS"},
+                      {{std::to_string(large["objects"].get<uint64_t>()),
+                        fixed(large["triangles"].get<double>() / 1e6, 1) + " M",
+                        fixed(large["seconds"].get<double>(), 0) + " s",
+                        fixed(large["triangles_per_second"].get<double>() / 1e6, 3),
+                        mib(large["peak_rss_bytes"])}});
+  return md + "\nTarget: under 2 GiB peak RSS.\n\n";
+}
+
+std::string reads_markdown(const Json& io, int rounds) {
+  std::string md = "## Reads\n\nThe world's geometry section, page cache bypassed (store: " +
+                   io["store_mode"].get<std::string>() + ", reference: " + io["raw_mode"].get<std::string>() +
+                   "), " + std::to_string(rounds) +
+                   " interleaved rounds; the ratio is the median over rounds of raw time / method time (1 = "
+                   "as fast as the device path).\n\n";
+  bench::Table rows;
   for (const Json& r : io["results"]) {
-    io_rows.push_back({r["access"], r["method"], fixed(r["microseconds_per_read"].get<double>(), 1),
-                       fixed(r["mb_per_second"].get<double>(), 1),
-                       fixed(r["throughput_to_raw"].get<double>(), 3)});
+    rows.push_back({r["access"], r["method"], fixed(r["microseconds_per_read"].get<double>(), 1),
+                    fixed(r["mb_per_second"].get<double>(), 1),
+                    fixed(r["throughput_to_raw"].get<double>(), 3)});
   }
-  md += md_table({"Access", "Method", "µs/read", "MB/s", "× raw"}, io_rows);
-  md += "\n## Decode\n\n`decode_mesh` on " + std::to_string(d["levels"].get<uint64_t>()) +
-        " encoded levels of the world (" + mib(d["encoded_bytes"]) + " encoded, " +
-        mib(d["decoded_bytes"]) + " decoded) against memcpy of the decoded bytes.\n\n";
-  md += md_table({"", "GB/s of decoded mesh", "× memcpy"},
-                 {{"memcpy", fixed(d["memcpy_gb_per_second"].get<double>(), 2), "1.000"},
-                  {"decode_mesh", fixed(d["decode_gb_per_second"].get<double>(), 2),
-                   fixed(d["decode_to_memcpy"].get<double>(), 3)}});
-  md +=
+  return md + figures_table({"Access", "Method", "µs/read", "MB/s", "× raw"}, rows);
+}
+
+std::string decode_markdown(const Json& d) {
+  return "\n## Decode\n\n`decode_mesh` on " + std::to_string(d["levels"].get<uint64_t>()) +
+         " encoded levels of the world (" + mib(d["encoded_bytes"]) + " encoded, " +
+         mib(d["decoded_bytes"]) + " decoded) against memcpy of the decoded bytes.\n\n" +
+         figures_table({"", "GB/s of decoded mesh", "× memcpy"},
+                       {{"memcpy", fixed(d["memcpy_gb_per_second"].get<double>(), 2), "1.000"},
+                        {"decode_mesh", fixed(d["decode_gb_per_second"].get<double>(), 2),
+                         fixed(d["decode_to_memcpy"].get<double>(), 3)}});
+}
+
+std::string cache_markdown(const Json& c, const Json& fractions) {
+  std::string md =
       "\n## Cache policies\n\nOne trace, replayed through a BufferManager under a MemoryBudget per "
       "policy and budget: "
       "a generated walk of " +
@@ -846,14 +791,19 @@ std::string build_markdown(const Json& s) {
       "for.\n\n";
   std::vector<std::string> header = {"Budget (of working set)"};
   for (const PolicyMaker& p : policies()) header.push_back(p.name);
-  std::vector<std::vector<std::string>> rows;
-  for (double f : s["params"]["budget_fractions"]) {
+  bench::Table rows;
+  for (double f : fractions) {
     rows.push_back({fixed(f * 100, 0) + " %"});
     for (const PolicyMaker& p : policies())
       rows.back().push_back(fixed(hit_ratio_of(c, p.name, f), 3));
   }
-  md += md_table(header, rows);
-  md += "\n![Hit ratio against budget](store/hit_ratio.svg)\n\n## Reading\n\n";
+  return md + figures_table(header, rows) + "\n![Hit ratio against budget](store/hit_ratio.svg)\n\n";
+}
+
+std::string markdown(const Json& s) {
+  std::string md = header_markdown(s) + build_markdown(s["build"]) + large_markdown(s["large"]) +
+                   reads_markdown(s["io"], s["params"]["io_rounds"].get<int>()) + decode_markdown(s["decode"]) +
+                   cache_markdown(s["cache"], s["params"]["budget_fractions"]) + "## Reading\n\n";
   for (const Json& line : s["reading"]) md += "- " + line.get<std::string>() + "\n";
   return md;
 }
@@ -863,31 +813,29 @@ void write_report(const fs::path& out, const Json& summary, const Json& io_rows,
   const fs::path dir = out / "store";
   fs::create_directories(dir);
   const Json& b = summary["build"];
-  write_csv(dir / "build.csv",
-            {"stage", "triangles", "seconds", "triangles_per_second", "peak_rss_bytes"},
-            Json::array({Json::array({"meshopt_simplify", b["triangles"],
-                                      b["triangles"].get<double>() /
-                                          b["simplify_triangles_per_second"].get<double>(),
-                                      b["simplify_triangles_per_second"], nullptr}),
-                         Json::array({"build_lod_chain", b["triangles"],
-                                      b["triangles"].get<double>() /
-                                          b["lod_chain_triangles_per_second"].get<double>(),
-                                      b["lod_chain_triangles_per_second"], nullptr}),
-                         Json::array({"build_world", b["triangles"], b["seconds"],
-                                      b["triangles_per_second"], b["peak_rss_bytes"]})}));
-  write_csv(dir / "io.csv", {"access", "method", "round", "seconds", "reads", "bytes"}, io_rows);
-  write_csv(
-      dir / "decode.csv",
-      {"round", "levels", "encoded_bytes", "decoded_bytes", "decode_seconds", "memcpy_seconds"},
-      decode_rows);
+  const Json build_rows =
+      Json::array({Json::array({"meshopt_simplify", b["triangles"],
+                                b["triangles"].get<double>() / b["simplify_triangles_per_second"].get<double>(),
+                                b["simplify_triangles_per_second"], nullptr}),
+                   Json::array({"build_lod_chain", b["triangles"],
+                                b["triangles"].get<double>() / b["lod_chain_triangles_per_second"].get<double>(),
+                                b["lod_chain_triangles_per_second"], nullptr}),
+                   Json::array({"build_world", b["triangles"], b["seconds"], b["triangles_per_second"],
+                                b["peak_rss_bytes"]})});
+  write_csv(dir / "build.csv", {"stage", "triangles", "seconds", "triangles_per_second", "peak_rss_bytes"},
+            csv_cells(build_rows));
+  write_csv(dir / "io.csv", {"access", "method", "round", "seconds", "reads", "bytes"}, csv_cells(io_rows));
+  write_csv(dir / "decode.csv",
+            {"round", "levels", "encoded_bytes", "decoded_bytes", "decode_seconds", "memcpy_seconds"},
+            csv_cells(decode_rows));
   write_csv(dir / "cache.csv",
-            {"policy", "budget_fraction", "budget_bytes", "requests", "hits", "hit_ratio",
-             "bytes_loaded", "evictions", "transient"},
-            cache_rows);
+            {"policy", "budget_fraction", "budget_bytes", "requests", "hits", "hit_ratio", "bytes_loaded",
+             "evictions", "transient"},
+            csv_cells(cache_rows));
   write_file_atomically((dir / "summary.json").string(), summary.dump(2) + "\n");
   write_file_atomically((dir / "hit_ratio.svg").string(),
                         render_svg(hit_ratio_plot(summary["cache"])));
-  write_file_atomically((out / "store.md").string(), build_markdown(summary));
+  write_file_atomically((out / "store.md").string(), markdown(summary));
 }
 
 Json params_json(const StoreBenchParams& p) {
@@ -912,12 +860,11 @@ nlohmann::ordered_json run_store_bench(const StoreBenchParams& params) {
   const bench::WorkDir work(params.work_dir, "store");
   const std::string scene = (work.path() / "city.cwscene").string();
   const std::string world_file = (work.path() / "city.cww").string();
-  generate_city_scene(params.objects, scene);
-  BuildParams build_params;
-  build_params.threads = params.threads;
+  bench::write_generated_scene(CityParams{.objects = params.objects}, scene, "generate city");
+  const bench::WorldBuild world_params = world_build(params, "build");
   // First, while this process holds little that the forked child would inherit.
-  const Json build = build_in_child(scene, world_file, build_params, "build");
-  const ReferenceTimes references = time_references(scene, build_params.lod);
+  const Json build = build_in_child(scene, world_file, world_params);
+  const ReferenceTimes references = time_references(scene, world_params.params.lod);
 
   summary["build"] = build_section(build, references);
   const World world(world_file, WorldFile::Options{.bypass_cache = true});

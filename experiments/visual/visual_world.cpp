@@ -5,12 +5,10 @@
 #include <algorithm>
 
 #include "cellwalk/systems/visual/visual_strategy.hpp"
-#include "cellwalk/scene/generators.hpp"
-#include "cellwalk/index/rtree.hpp"
-#include "cellwalk/scene/scene_file.hpp"
 #include "cellwalk/precompute/engine.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"
+#include "experiments/common/bench_world.hpp"
 #include "precompute/pvs_builder.hpp"
 
 namespace cellwalk::visual_bench {
@@ -18,25 +16,13 @@ namespace cellwalk::visual_bench {
 namespace fs = std::filesystem;
 
 std::string build_city(const VisualBenchParams& p, uint64_t objects, const fs::path& dir, const std::string& name) {
-  const std::string scene = (dir / (name + ".cwscene")).string();
   const std::string raw = (dir / (name + ".cww")).string();
-  {
-    SceneWriter writer(scene);
-    CityParams city;
-    city.objects = objects;
-    city.seed = p.seed;
-    writer.finish(generate_city(city, writer));
-  }
-  BuildParams build;
-  build.threads = p.threads;
-  Progress progress("build " + name + " (" + std::to_string(objects) + " objects)", objects);
   // REVIEW, the baseline of Exp. 3, queries the world's own R-tree (its default fan-out).
-  build_world(scene, raw, build, [&](uint64_t done, uint64_t) { progress.update(done); },
-              [&](WorldWriter& writer, std::span<const Aabb> bounds) {
-                write_rtree_section(build_rtree(bounds, RTreeParams{.max_entries = 32}, writer.page_size()), writer);
-              });
-  progress.finish();
-  fs::remove(scene);
+  bench::make_bench_world(CityParams{.objects = objects, .seed = p.seed},
+                          {.params = {.threads = p.threads},
+                           .rtree_fanout = 32,
+                           .progress_label = "build " + name + " (" + std::to_string(objects) + " objects)"},
+                          (dir / (name + ".cwscene")).string(), raw);
   return raw;
 }
 
