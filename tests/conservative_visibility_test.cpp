@@ -74,19 +74,25 @@ TEST(Occluders, OpenMeshGivesNone) {
 // the opposite winding), and a double-sided box and triangle: every edge is used an even
 // number of times and in both directions, so all four pass the closedness and orientation
 // tests, and all their triangles lie in the faces of their bounding boxes; but the winding
-// number is 0 everywhere, so none encloses anything and none may give an occluder.
-TEST(Occluders, DoubleSidedSurfacesGiveNone) {
+// number is 0 everywhere. One side alone, the L, the room and the triangle are open: they
+// enclose nothing and may give no occluder. The box encloses itself, double-sided or not.
+TEST(Occluders, DoubleSidedSurfacesEncloseWhatOneSideEncloses) {
   Mesh l = test::double_sided(test::quad_mesh({0, 0, 0}, {0, 0, 10}, {0, 10, 10}, {0, 10, 0}));
   append(l, test::double_sided(test::quad_mesh({0, 0, 0}, {0, 10, 0}, {10, 10, 0}, {10, 0, 0})));
   Mesh triangle = test::double_sided(test::quad_mesh({5, 0, 0}, {5, 0, 10}, {5, 10, 10}, {5, 10, 0}));
   triangle.indices = {0, 1, 2, 4, 6, 5};
-  const Mesh solid_box = box_mesh(box({0, 0, 0}, {4, 5, 6}));
-  for (const Mesh& m : {l, test::double_sided_room_with_door(), test::double_sided(solid_box), triangle}) {
+  const Aabb b = box({0, 0, 0}, {4, 5, 6});
+  const Mesh two_sided_box = test::double_sided(box_mesh(b));
+  for (const Mesh& m : {l, test::double_sided_room_with_door(), triangle, two_sided_box}) {
     ASSERT_TRUE(visibility::is_closed(m));
     ASSERT_TRUE(visibility::is_oriented(m));
-    EXPECT_TRUE(visibility::inscribed_boxes(m).boxes.empty()) << m.triangle_count() << " triangles";
   }
-  EXPECT_EQ(visibility::inscribed_boxes(solid_box).boxes.size(), 1u);  // one side: solid
+  for (const Mesh& m : {l, test::double_sided_room_with_door(), triangle})
+    EXPECT_TRUE(visibility::inscribed_boxes(m).boxes.empty()) << m.triangle_count() << " triangles";
+  const auto found = visibility::inscribed_boxes(two_sided_box);
+  ASSERT_EQ(found.boxes.size(), 1u);
+  EXPECT_EQ(found.boxes[0].min, b.min);
+  EXPECT_EQ(found.boxes[0].max, b.max);
 }
 
 // An L of two overlapping boxes in one mesh: every inscribed box lies in the union, and the
@@ -726,8 +732,9 @@ TEST(ConservativeEngine, CubeSeenThroughTheDoorOfADoubleSidedRoomIsKept) {
 }
 
 // Every constructed scene of the tests above, with its boxes written double-sided: a
-// double-sided box still stops every ray, but encloses nothing (winding number 0), so the
-// engine may prove less; it must still keep all that rays from the cell reach.
+// double-sided box stops the same rays and encloses the same volume (its winding number is 0,
+// one side's is 1), so the engine must keep all that rays from the cell reach and prove just
+// as much as with one-sided boxes.
 TEST(ConservativeEngine, DoubleSidedVariantsOfTheScenesKeepWhatRaysSee) {
   struct Case {
     std::string name;
@@ -749,7 +756,9 @@ TEST(ConservativeEngine, DoubleSidedVariantsOfTheScenesKeepWhatRaysSee) {
   for (const Case& c : cases) {
     std::vector<Object> objects;
     for (const Aabb& b : c.boxes) objects.push_back(object_of(ObjectId(objects.size()), test::double_sided(box_mesh(b))));
-    expect_keeps_what_rays_see(Scene(objects), c.cell, ++seed, 60, c.name);
+    const Scene two_sided(objects);
+    expect_keeps_what_rays_see(two_sided, c.cell, ++seed, 60, c.name);
+    EXPECT_EQ(two_sided.visible(c.cell), Scene(boxes(c.boxes)).visible(c.cell)) << c.name;
   }
 }
 

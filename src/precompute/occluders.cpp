@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <map>
 #include <optional>
 #include <unordered_map>
 
@@ -477,6 +478,56 @@ std::optional<Aabb> box_part(const Mesh& part) {
   return b;
 }
 
+std::vector<Aabb> boxes_of_closed(const Mesh& mesh, const OccluderParams& params) {
+  const std::optional<Aabb> whole = box_part(mesh);
+  return whole ? std::vector<Aabb>{*whole} : boxes_of_solid(mesh, params);
+}
+
+// The mesh less one triangle of each pair of twins (the same three welded vertices in opposite
+// windings, as exporters write double-sided surfaces); nullopt when there is no pair. Twins
+// cover the same points, so the opaque surface is unchanged; but the pair adds nothing to
+// the cycle (winding number and parity), and one side alone bounds what the surface encloses.
+std::optional<Mesh> one_side_of_twins(const Mesh& mesh) {
+  const std::vector<uint32_t> id = welded_ids(mesh);
+  // The welded ids rotated to start at the smallest: equal for the same winding.
+  const auto key = [](uint32_t a, uint32_t b, uint32_t c) {
+    if (b < a && b <= c) return std::array<uint32_t, 3>{b, c, a};
+    if (c < a && c < b) return std::array<uint32_t, 3>{c, a, b};
+    return std::array<uint32_t, 3>{a, b, c};
+  };
+  std::map<std::array<uint32_t, 3>, size_t> unmatched;  // triangles still waiting for a twin
+  std::vector<uint8_t> dropped(mesh.triangle_count(), 0);
+  bool any = false;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint32_t a = id[mesh.indices[3 * t]], b = id[mesh.indices[3 * t + 1]], c = id[mesh.indices[3 * t + 2]];
+    const auto twin = unmatched.find(key(a, c, b));
+    if (twin != unmatched.end() && twin->second > 0) {
+      --twin->second;
+      dropped[t] = 1;
+      any = true;
+    } else {
+      ++unmatched[key(a, b, c)];
+    }
+  }
+  if (!any) return std::nullopt;
+  Mesh out;
+  out.positions = mesh.positions;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t)
+    if (!dropped[t]) out.indices.insert(out.indices.end(), mesh.indices.begin() + 3 * t, mesh.indices.begin() + 3 * t + 3);
+  return out;
+}
+
+// The boxes of one closed part. A part that gives none and holds twins is tried again with one
+// side of each: a double-sided closed box (winding number 0) is then the box it looks like,
+// while an L of double-sided walls or a room with a door is open and still gives none. Sound
+// either way: a solid bounded by some of the drawn triangles is enclosed by them.
+std::vector<Aabb> boxes_of_part(const Mesh& part, const OccluderParams& params) {
+  std::vector<Aabb> out = boxes_of_closed(part, params);
+  if (!out.empty()) return out;
+  const std::optional<Mesh> one_side = one_side_of_twins(part);
+  return one_side && is_closed(*one_side) ? boxes_of_closed(*one_side, params) : out;
+}
+
 // The largest boxes first, up to max_boxes, each at least min_gain of the largest's volume
 // and not inside one already kept.
 std::vector<Aabb> largest_boxes(std::vector<Aabb> candidates, const OccluderParams& params) {
@@ -512,8 +563,7 @@ InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params) {
   for (const auto& [part_volume, i] : order) {
     if (part_volume < params.min_gain * largest || !is_closed(parts[i])) continue;
     any_closed_part = true;
-    const std::optional<Aabb> whole = box_part(parts[i]);
-    for (const Aabb& b : whole ? std::vector<Aabb>{*whole} : boxes_of_solid(parts[i], params)) {
+    for (const Aabb& b : boxes_of_part(parts[i], params)) {
       candidates.push_back(b);
       largest = std::max(largest, volume(b));
     }
