@@ -97,6 +97,42 @@ Mesh box_mesh(const Aabb& b) {
   return m;
 }
 
+Mesh quad_mesh(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d) {
+  Mesh m;
+  const Vec3 n = glm::normalize(glm::cross(b - a, c - a));
+  for (const Vec3& p : {a, b, c, d}) {
+    m.positions.push_back(p);
+    m.normals.push_back(n);
+  }
+  m.indices = {0, 1, 2, 0, 2, 3};
+  return m;
+}
+
+Mesh double_sided(const Mesh& mesh) {
+  Mesh back = mesh;
+  for (Vec3& n : back.normals) n = -n;
+  for (size_t t = 0; t + 2 < back.indices.size(); t += 3) std::swap(back.indices[t + 1], back.indices[t + 2]);
+  Mesh out = mesh;
+  append(out, back);
+  return out;
+}
+
+Mesh double_sided_room_with_door() {
+  const float w = 10, h = 3, door_lo = 4, door_hi = 6, door_top = 2.2f;
+  Mesh m;
+  for (const Mesh& q : {quad_mesh({0, 0, 0}, {0, 0, w}, {w, 0, w}, {w, 0, 0}),        // floor
+                        quad_mesh({0, h, 0}, {w, h, 0}, {w, h, w}, {0, h, w}),        // ceiling
+                        quad_mesh({0, 0, 0}, {0, h, 0}, {0, h, w}, {0, 0, w}),        // x = 0
+                        quad_mesh({w, 0, 0}, {w, 0, w}, {w, h, w}, {w, h, 0}),        // x = 10
+                        quad_mesh({0, 0, w}, {0, h, w}, {w, h, w}, {w, 0, w}),        // z = 10
+                        quad_mesh({0, 0, 0}, {door_lo, 0, 0}, {door_lo, h, 0}, {0, h, 0}),  // z = 0 ...
+                        quad_mesh({door_hi, 0, 0}, {w, 0, 0}, {w, h, 0}, {door_hi, h, 0}),
+                        quad_mesh({door_lo, door_top, 0}, {door_hi, door_top, 0}, {door_hi, h, 0},
+                                  {door_lo, h, 0})})  // ... around the doorway
+    append(m, double_sided(q));
+  return m;
+}
+
 std::string write_street_scene(const TempDir& dir, int count, uint64_t seed) {
   const std::string file = dir.file("street-" + std::to_string(seed) + ".cwscene");
   Random rng(seed);

@@ -49,6 +49,17 @@ namespace cellwalk::test {
 // A closed box mesh (24 vertices with face normals, 12 triangles).
 Mesh box_mesh(const Aabb& box);
 
+// The planar quad a, b, c, d (in that order around it; two triangles, one face normal). Open.
+Mesh quad_mesh(const Vec3& a, const Vec3& b, const Vec3& c, const Vec3& d);
+
+// `mesh` as exporters write a double-sided surface: every triangle a second time in the
+// opposite winding, on vertices of its own with the normals flipped.
+Mesh double_sided(const Mesh& mesh);
+
+// A 10 × 3 × 10 m room (x, z in [0, 10], floor y = 0, ceiling y = 3) of double-sided quads, the
+// wall z = 0 with a 2 × 2.2 m doorway at x in [4, 6]: a surface that encloses nothing.
+Mesh double_sided_room_with_door();
+
 // Writes a scene of `count` boxes beside a street along the x axis (z = 0), with a
 // navigation graph down the street, and returns its path. Deterministic in `seed`.
 std::string write_street_scene(const TempDir& dir, int count, uint64_t seed = 1);

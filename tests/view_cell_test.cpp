@@ -191,5 +191,47 @@ TEST(ViewCells, CellsInsideAnObjectAreSolid) {
   EXPECT_FALSE(scene.inside(0, Vec3(25.0f)));
 }
 
+// The solid test counts crossings with closed meshes only: a cell on the −x side of one slanted
+// open quad, inside its bounding box, is crossed once by every +x ray from its points, yet it
+// is in open air. Brute-force oracle: a solid cell must be inside the block's box, the only
+// closed object.
+TEST(ViewCells, OnlyClosedGeometryMakesCellsSolid) {
+  test::TempDir dir;
+  Object slanted, block;
+  slanted.mesh = test::quad_mesh({10, 0, 0}, {0, 20, 0}, {0, 20, 20}, {10, 0, 20});  // x + y/2 = 10
+  const Aabb inside_block{Vec3(30.0f), Vec3(40.0f)};
+  block.mesh = test::box_mesh(inside_block);
+  block.id = 1;
+  const World world(test::write_world(dir, {slanted, block}, NavGraph{}));
+  const visibility::EmbreeScene scene(world);
+  EXPECT_FALSE(scene.inside(0, Vec3(2, 2, 2)));
+  EXPECT_FALSE(scene.box_is_solid(Aabb{Vec3(0.0f), Vec3(5.0f)}));
+  CellRegion r = region_2d({0, 0, 0}, {40, 40, 40});
+  r.two_d = false;
+  const auto grid = make_grid_partition(r, 5.0f, [&](const Aabb& b) { return scene.box_is_solid(b); });
+  int solid = 0;
+  for (CellId c = 0; c < grid->cell_count(); ++c) {
+    const Aabb& b = grid->cell(c).box;
+    EXPECT_EQ(grid->cell(c).solid, inside_block.contains(b.min) && inside_block.contains(b.max)) << c;
+    solid += grid->cell(c).solid;
+  }
+  EXPECT_EQ(solid, 8);
+}
+
+// A room of double-sided quads is closed and oriented but encloses nothing (winding number 0;
+// each ray crosses every wall twice, at one point): none of its cells is solid.
+TEST(ViewCells, NoCellOfADoubleSidedRoomIsSolid) {
+  test::TempDir dir;
+  Object room;
+  room.mesh = test::double_sided_room_with_door();
+  const World world(test::write_world(dir, {room}, NavGraph{}));
+  const visibility::EmbreeScene scene(world);
+  const auto grid = make_grid_partition(region_2d({0, 0, 0}, {10, 3, 10}), 2.0f,
+                                        [&](const Aabb& b) { return scene.box_is_solid(b); });
+  ASSERT_EQ(grid->cell_count(), 25u);
+  for (CellId c = 0; c < grid->cell_count(); ++c) EXPECT_FALSE(grid->cell(c).solid) << c;
+  EXPECT_FALSE(scene.inside(0, Vec3(5.1f, 1.7f, 5.2f)));
+}
+
 }  // namespace
 }  // namespace cellwalk

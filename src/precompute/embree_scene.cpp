@@ -1,14 +1,14 @@
-// The world's level-0 triangles in an Embree 3 scene: nearest-hit rays and point-in-mesh by
-// ray parity (vLOD §5; HDoV thesis §5.5; solid view cells, docs/visibility.md).
+// The world's level-0 triangles in an Embree 3 scene: nearest-hit rays, and point-in-solid
+// against closed meshes only (vLOD §5; HDoV thesis §5.5; solid view cells, docs/visibility.md).
 #include "precompute/embree_scene.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <cstring>
-#include <limits>
 #include <mutex>
 
 #include "cellwalk/core/error.hpp"
+#include "precompute/occluders.hpp"
 
 namespace cellwalk::visibility {
 
@@ -30,21 +30,28 @@ RTCRayHit make_ray(const Vec3& o, const Vec3& d, float near, float far) {
   return rh;
 }
 
-RTCGeometry make_geometry(RTCDevice device, const Mesh& mesh) {
+static_assert(sizeof(Vec3) == 3 * sizeof(float), "Embree's FLOAT3 vertices are read as Vec3");
+
+// The geometry, and the mesh's arrays as copied into Embree's buffers (which live as long as
+// the scene holds the geometry).
+RTCGeometry make_geometry(RTCDevice device, const Mesh& mesh, std::span<const Vec3>& positions,
+                          std::span<const uint32_t>& indices) {
   RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                        3 * sizeof(float), mesh.vertex_count()));
-  for (size_t i = 0; i < mesh.vertex_count(); ++i) std::memcpy(v + 3 * i, &mesh.positions[i], 3 * sizeof(float));
+  auto* v = static_cast<Vec3*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                       sizeof(Vec3), mesh.vertex_count()));
+  std::memcpy(v, mesh.positions.data(), mesh.vertex_count() * sizeof(Vec3));
   auto* t = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
                                                            3 * sizeof(uint32_t), mesh.triangle_count()));
   std::memcpy(t, mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
   rtcCommitGeometry(g);
+  positions = {v, mesh.vertex_count()};
+  indices = {t, mesh.indices.size()};
   return g;
 }
 
 }  // namespace
 
-EmbreeScene::EmbreeScene(const World& world) : world_(world) {
+EmbreeScene::EmbreeScene(const World& world) : world_(world), solids_(world.object_count()) {
   device_ = rtcNewDevice(nullptr);
   if (!device_) fail("embree", "cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
   scene_ = rtcNewScene(device_);
@@ -54,7 +61,10 @@ EmbreeScene::EmbreeScene(const World& world) : world_(world) {
     const auto id = static_cast<ObjectId>(i);
     const Mesh mesh = world.decode_level(id, 0, world.read_level(id, 0));
     if (mesh.triangle_count() == 0) return;
-    RTCGeometry g = make_geometry(device_, mesh);
+    Solid& solid = solids_[i];
+    solid.closed = visibility::is_closed(mesh);
+    solid.oriented = solid.closed && visibility::is_oriented(mesh);
+    RTCGeometry g = make_geometry(device_, mesh, solid.positions, solid.indices);
     std::lock_guard lock(attach);
     rtcAttachGeometryByID(scene_, g, id);
     rtcReleaseGeometry(g);
@@ -77,27 +87,15 @@ std::optional<ObjectId> EmbreeScene::first_hit(const Vec3& origin, const Vec3& d
 }
 
 bool EmbreeScene::inside(ObjectId id, const Vec3& p) const {
-  // Slightly off-axis, so the ray is unlikely to graze the axis-aligned edges of boxes.
-  const Vec3 dir = glm::normalize(Vec3(1.0f, 0.0137f, 0.0071f));
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  float t = 0.0f;
-  int crossings = 0;
-  for (int step = 0; step < 100000; ++step) {
-    RTCRayHit rh = make_ray(p, dir, t, std::numeric_limits<float>::infinity());
-    rtcIntersect1(scene_, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) break;
-    if (rh.hit.geomID == id) ++crossings;
-    t = std::nextafter(rh.ray.tfar, std::numeric_limits<float>::infinity()) + 1e-5f * (1.0f + rh.ray.tfar);
-  }
-  return crossings % 2 == 1;
+  const Solid& s = solids_.at(id);
+  return s.closed && visibility::solid_at(s.positions, s.indices, p, s.oriented);
 }
 
 bool EmbreeScene::box_is_solid(const Aabb& box) const {
   const Vec3 c = box.center();
   for (ObjectId id = 0; id < world_.object_count(); ++id) {
     const Aabb& b = world_.object(id).bounds;
-    if (!(b.contains(box.min) && b.contains(box.max))) continue;
+    if (!solids_[id].closed || !(b.contains(box.min) && b.contains(box.max))) continue;
     bool all = inside(id, c);
     for (int k = 0; all && k < 8; ++k) {
       const Vec3 corner{k & 1 ? box.max.x : box.min.x, k & 2 ? box.max.y : box.min.y, k & 4 ? box.max.z : box.min.z};

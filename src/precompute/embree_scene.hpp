@@ -6,6 +6,8 @@
 #include <embree3/rtcore.h>
 
 #include <optional>
+#include <span>
+#include <vector>
 
 #include "cellwalk/store/world.hpp"
 
@@ -24,8 +26,10 @@ class EmbreeScene {
   // The first object hit along origin + t·dir for t in (0, far), nullopt if none.
   std::optional<ObjectId> first_hit(const Vec3& origin, const Vec3& dir, float far) const;
 
-  // Whether p is inside object `id`'s mesh: a ray's crossings with that mesh are odd. Meaningful
-  // for closed meshes; a point on the surface may go either way.
+  // Whether p is provably inside the solid object `id`'s mesh bounds: the mesh is closed
+  // (is_closed) and visibility::solid_at says so, by winding number when the mesh is oriented,
+  // else by parity, along six rays that must agree. Never for an open mesh (a plane, a slanted
+  // wall) or a double-sided one (winding number 0); a point on the surface is not inside.
   bool inside(ObjectId id, const Vec3& p) const;
 
   // A view cell is solid when its box lies within one object's bounding box and its centre and
@@ -34,7 +38,16 @@ class EmbreeScene {
   bool box_is_solid(const Aabb& box) const;
 
  private:
+  // An object's triangles as Embree holds them (no second copy), and what its solid is.
+  struct Solid {
+    std::span<const Vec3> positions;
+    std::span<const uint32_t> indices;
+    bool closed = false;    // visibility::is_closed: crossings define a solid
+    bool oriented = false;  // visibility::is_oriented: by winding number, else by parity
+  };
+
   const World& world_;
+  std::vector<Solid> solids_;  // per object
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
 };

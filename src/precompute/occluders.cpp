@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <functional>
+#include <map>
 #include <optional>
 #include <unordered_map>
 
@@ -97,6 +98,29 @@ double edge(double ax, double ay, double bx, double by, double px, double py) {
   return (bx - ax) * (py - ay) - (by - ay) * (px - ax);
 }
 
+// How the line parallel to `axis` through (sb, sc) on the other two axes meets triangle p:
+// missing it (outside, or a zero-area projection), through its interior at `at` along the
+// axis (sign: the triangle's orientation seen along the axis), or exactly through an edge or
+// vertex, where counting the crossing would be a guess.
+struct LineCrossing {
+  enum Kind { kMiss, kHit, kDoubtful } kind = kMiss;
+  double at = 0.0;
+  int sign = 0;
+};
+
+LineCrossing line_crossing(const std::array<glm::dvec3, 3>& p, int axis, double sb, double sc) {
+  const int b = (axis + 1) % 3, c = (axis + 2) % 3;
+  const double e0 = edge(p[1][b], p[1][c], p[2][b], p[2][c], sb, sc);
+  const double e1 = edge(p[2][b], p[2][c], p[0][b], p[0][c], sb, sc);
+  const double e2 = edge(p[0][b], p[0][c], p[1][b], p[1][c], sb, sc);
+  const bool any_negative = e0 < 0 || e1 < 0 || e2 < 0;
+  const bool any_positive = e0 > 0 || e1 > 0 || e2 > 0;
+  if (any_negative == any_positive) return {};
+  if (e0 == 0.0 || e1 == 0.0 || e2 == 0.0) return {LineCrossing::kDoubtful};
+  const double sum = e0 + e1 + e2;
+  return {LineCrossing::kHit, (e0 * p[0][axis] + e1 * p[1][axis] + e2 * p[2][axis]) / sum, sum > 0 ? 1 : -1};
+}
+
 // Counts crossings along rays parallel to `axis` through every voxel's sample point and
 // clears `inside` where the point is outside: winding number 0 (signed crossings, for a
 // consistently oriented mesh: inside any of several overlapping closed parts counts), else
@@ -122,21 +146,10 @@ void vote_inside(const Grid& g, const Mesh& mesh, int axis, bool winding,
     const int j0 = std::max(0, int(std::ceil((lo_c - g.origin[c]) / g.voxel[c] - Grid::kSampleOffset[c])));
     for (int j = j0; j < g.n && g.sample(c, j) <= hi_c; ++j)
       for (int i = i0; i < g.n && g.sample(b, i) <= hi_b; ++i) {
-        const double sb = g.sample(b, i), sc = g.sample(c, j);
-        const double e0 = edge(p[1][b], p[1][c], p[2][b], p[2][c], sb, sc);
-        const double e1 = edge(p[2][b], p[2][c], p[0][b], p[0][c], sb, sc);
-        const double e2 = edge(p[0][b], p[0][c], p[1][b], p[1][c], sb, sc);
+        const LineCrossing x = line_crossing(p, axis, g.sample(b, i), g.sample(c, j));
         const size_t column = size_t(j) * g.n + i;
-        const bool any_negative = e0 < 0 || e1 < 0 || e2 < 0;
-        const bool any_positive = e0 > 0 || e1 > 0 || e2 > 0;
-        if (any_negative == any_positive) continue;  // outside, or a zero-area projection
-        if (e0 == 0.0 || e1 == 0.0 || e2 == 0.0) {
-          doubtful[column] = 1;  // through an edge or vertex: the count would be a guess
-          continue;
-        }
-        const double sum = e0 + e1 + e2;
-        hits[column].push_back({(e0 * p[0][axis] + e1 * p[1][axis] + e2 * p[2][axis]) / sum,
-                                winding ? (sum > 0 ? 1 : -1) : 1});
+        if (x.kind == LineCrossing::kDoubtful) doubtful[column] = 1;  // the count would be a guess
+        if (x.kind == LineCrossing::kHit) hits[column].push_back({x.at, winding ? x.sign : 1});
       }
   }
   for (int j = 0; j < g.n; ++j)
@@ -338,6 +351,50 @@ bool is_closed(const Mesh& mesh) {
 
 namespace {
 
+// Three orthonormal directions in no special position: lines along them through a point of
+// a generated world (regular coordinates, cubes and quads split along their diagonals, cell
+// corners pulled in equally along every axis) practically never pass through an edge.
+const std::array<glm::dvec3, 3>& probe_directions() {
+  static const std::array<glm::dvec3, 3> directions = [] {
+    const glm::dvec3 a = glm::normalize(glm::dvec3(1.0, 0.3137, 0.2071));
+    const glm::dvec3 b = glm::normalize(glm::cross(a, glm::dvec3(0.1713, 1.0, 0.4271)));
+    return std::array<glm::dvec3, 3>{a, b, glm::cross(a, b)};
+  }();
+  return directions;
+}
+
+}  // namespace
+
+bool solid_at(std::span<const Vec3> positions, std::span<const uint32_t> indices, const Vec3& point,
+              bool winding) {
+  const glm::dvec3 q(point);
+  const std::array<glm::dvec3, 3>& frame = probe_directions();
+  std::array<int, 3> ahead{}, behind{};  // per direction: crossings beyond q and before it
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    std::array<glm::dvec3, 3> p;  // the triangle in the frame, q at the origin
+    for (int v = 0; v < 3; ++v) {
+      const glm::dvec3 r = glm::dvec3(positions[indices[t + v]]) - q;
+      p[v] = {glm::dot(frame[0], r), glm::dot(frame[1], r), glm::dot(frame[2], r)};
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      const LineCrossing x = line_crossing(p, axis, 0.0, 0.0);
+      if (x.kind == LineCrossing::kMiss) continue;
+      if (x.kind == LineCrossing::kDoubtful || x.at == 0.0) return false;  // a guess, or q on it
+      (x.at > 0.0 ? ahead : behind)[axis] += winding ? x.sign : 1;
+    }
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    // Along a whole line a cycle's crossings cancel (winding) or pair up (parity): the two rays
+    // from q must agree, else rounding has split a crossing, or the mesh is not closed.
+    const bool agree = winding ? ahead[axis] == -behind[axis] : (ahead[axis] - behind[axis]) % 2 == 0;
+    const bool inside = winding ? ahead[axis] != 0 : ahead[axis] % 2 != 0;
+    if (!agree || !inside) return false;
+  }
+  return true;
+}
+
+namespace {
+
 // Triangles grouped into connected components (sharing welded vertices), each as its own
 // compact mesh. Generated and modelled objects are assemblies of overlapping closed parts:
 // the faces of one part that lie inside another cut the whole mesh's interior into slices
@@ -397,11 +454,16 @@ double volume(const Aabb& b) {
   return double(s.x) * s.y * s.z;
 }
 
-// A closed part all of whose triangles lie in the faces of its bounding box is that box: a
-// closed surface inside a sphere's surface is all of it, so crossing parity says "inside"
-// exactly in the box.
+// A closed part all of whose triangles lie in the faces of its bounding box bounds that box or
+// nothing: a cycle of triangles on a box's surface is k times the whole surface (one class, as
+// on a sphere), and k is the winding number (oriented) or parity anywhere inside the open box.
+// k = 0 is the common case of open surfaces written double-sided (each triangle twice, in
+// opposite windings: an L of two walls, a room with a door), which pass the closedness test
+// but enclose nothing. So one point inside must be solid; an unoriented part, or one whose
+// point test is in doubt, is left to the voxel classification.
 std::optional<Aabb> box_part(const Mesh& part) {
   const Aabb b = bounds_of(part);
+  if (!(volume(b) > 0.0) || !is_oriented(part)) return std::nullopt;
   for (size_t t = 0; t + 2 < part.indices.size(); t += 3) {
     bool on_face = false;
     for (int a = 0; a < 3 && !on_face; ++a)
@@ -412,7 +474,58 @@ std::optional<Aabb> box_part(const Mesh& part) {
       }
     if (!on_face) return std::nullopt;
   }
+  if (!solid_at(part.positions, part.indices, b.center(), true)) return std::nullopt;
   return b;
+}
+
+std::vector<Aabb> boxes_of_closed(const Mesh& mesh, const OccluderParams& params) {
+  const std::optional<Aabb> whole = box_part(mesh);
+  return whole ? std::vector<Aabb>{*whole} : boxes_of_solid(mesh, params);
+}
+
+// The mesh less one triangle of each pair of twins (the same three welded vertices in opposite
+// windings, as exporters write double-sided surfaces); nullopt when there is no pair. Twins
+// cover the same points, so the opaque surface is unchanged; but the pair adds nothing to
+// the cycle (winding number and parity), and one side alone bounds what the surface encloses.
+std::optional<Mesh> one_side_of_twins(const Mesh& mesh) {
+  const std::vector<uint32_t> id = welded_ids(mesh);
+  // The welded ids rotated to start at the smallest: equal for the same winding.
+  const auto key = [](uint32_t a, uint32_t b, uint32_t c) {
+    if (b < a && b <= c) return std::array<uint32_t, 3>{b, c, a};
+    if (c < a && c < b) return std::array<uint32_t, 3>{c, a, b};
+    return std::array<uint32_t, 3>{a, b, c};
+  };
+  std::map<std::array<uint32_t, 3>, size_t> unmatched;  // triangles still waiting for a twin
+  std::vector<uint8_t> dropped(mesh.triangle_count(), 0);
+  bool any = false;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    const uint32_t a = id[mesh.indices[3 * t]], b = id[mesh.indices[3 * t + 1]], c = id[mesh.indices[3 * t + 2]];
+    const auto twin = unmatched.find(key(a, c, b));
+    if (twin != unmatched.end() && twin->second > 0) {
+      --twin->second;
+      dropped[t] = 1;
+      any = true;
+    } else {
+      ++unmatched[key(a, b, c)];
+    }
+  }
+  if (!any) return std::nullopt;
+  Mesh out;
+  out.positions = mesh.positions;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t)
+    if (!dropped[t]) out.indices.insert(out.indices.end(), mesh.indices.begin() + 3 * t, mesh.indices.begin() + 3 * t + 3);
+  return out;
+}
+
+// The boxes of one closed part. A part that gives none and holds twins is tried again with one
+// side of each: a double-sided closed box (winding number 0) is then the box it looks like,
+// while an L of double-sided walls or a room with a door is open and still gives none. Sound
+// either way: a solid bounded by some of the drawn triangles is enclosed by them.
+std::vector<Aabb> boxes_of_part(const Mesh& part, const OccluderParams& params) {
+  std::vector<Aabb> out = boxes_of_closed(part, params);
+  if (!out.empty()) return out;
+  const std::optional<Mesh> one_side = one_side_of_twins(part);
+  return one_side && is_closed(*one_side) ? boxes_of_closed(*one_side, params) : out;
 }
 
 // The largest boxes first, up to max_boxes, each at least min_gain of the largest's volume
@@ -450,8 +563,7 @@ InscribedBoxes inscribed_boxes(const Mesh& mesh, const OccluderParams& params) {
   for (const auto& [part_volume, i] : order) {
     if (part_volume < params.min_gain * largest || !is_closed(parts[i])) continue;
     any_closed_part = true;
-    const std::optional<Aabb> whole = box_part(parts[i]);
-    for (const Aabb& b : whole ? std::vector<Aabb>{*whole} : boxes_of_solid(parts[i], params)) {
+    for (const Aabb& b : boxes_of_part(parts[i], params)) {
       candidates.push_back(b);
       largest = std::max(largest, volume(b));
     }

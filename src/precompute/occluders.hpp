@@ -5,6 +5,7 @@
 // convex occluder hiding an object from the cell's 8 vertices hides it from the cell).
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "cellwalk/core/geometry.hpp"
@@ -19,7 +20,11 @@ struct OccluderParams {
 };
 
 // True when every edge of the mesh (vertices welded by exact position) is used by an even
-// number of triangles: the mesh bounds a solid, and crossing parity says what is inside it.
+// number of triangles (a mod-2 cycle): crossing parity along a ray no longer depends on the
+// ray, so it defines what is inside. That solid may be empty: a surface written double-sided
+// (each triangle twice, in opposite windings) is closed and oriented by this count, but every
+// point has even parity and winding number 0. So "closed" never means "encloses volume" by
+// itself; only the inside tests below (solid_at, the voxel classification) say what is solid.
 bool is_closed(const Mesh& mesh);
 
 struct InscribedBoxes {
@@ -30,6 +35,16 @@ struct InscribedBoxes {
 // True when, in addition, every edge is used as often in one direction as in the other: the
 // triangles are consistently oriented, and the winding number says what is inside.
 bool is_oriented(const Mesh& mesh);
+
+// Whether `point` lies strictly inside the solid a closed mesh bounds (REQUIRES is_closed):
+// six rays from it, both ways along three orthonormal directions in no special position, all
+// say so (non-zero winding number when `winding`, for an oriented mesh; odd crossing parity
+// otherwise) and the two rays along each line agree. Double precision; a ray through an edge
+// or vertex, or a point on a triangle, says "not inside", so numerical doubt does not make a
+// point solid. A double-sided surface (each
+// triangle also in the opposite winding) has winding number 0 and even parity everywhere.
+bool solid_at(std::span<const Vec3> positions, std::span<const uint32_t> indices, const Vec3& point,
+              bool winding);
 
 // Axis-aligned boxes inside the solid the closed mesh bounds (points of non-zero winding
 // number when the mesh is oriented, which counts overlapping closed parts as solid; else of
