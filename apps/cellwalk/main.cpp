@@ -33,6 +33,10 @@ int main(int argc, char** argv) {
   CLI::App root{"cellwalk: walkthroughs of 3D worlds larger than memory", "cellwalk"};
   root.require_subcommand(1);
   root.set_version_flag("--version", "cellwalk 0.1.0");
+  // One line like every other error (set before the subcommands, which copy it).
+  root.failure_message([](const CLI::App*, const CLI::Error& e) {
+    return "cellwalk: " + std::string(e.what()) + "; see cellwalk --help\n";
+  });
   cellwalk::app::register_generate(root);
   cellwalk::app::register_import(root);
   cellwalk::app::register_build(root);
