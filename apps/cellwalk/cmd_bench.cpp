@@ -32,11 +32,11 @@ void register_store(CLI::App& bench) {
   auto args = std::make_shared<Args>();
   StoreBenchParams& p = args->params;
   cmd->add_option("--objects", p.objects, "Objects of the generated city measured")
-      ->capture_default_str();
+      ->capture_default_str()->check(number_in(1, 1e7));
   cmd->add_flag("--large", p.large,
                 "Also generate and build a ~10^8-triangle city (long; needs ~6 GB of disk)");
   cmd->add_option("--large-objects", p.large_objects, "Objects of the --large city")
-      ->capture_default_str();
+      ->capture_default_str()->check(number_in(1, 1e7));
   cmd->add_option("--threads", p.threads, "Build threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_option("--frames", p.path_frames, "Frames of the walk recorded as the cache trace")
       ->capture_default_str()

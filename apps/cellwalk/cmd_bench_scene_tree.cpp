@@ -21,7 +21,7 @@ void register_bench_scene_tree(CLI::App& bench, std::string (*command_line)()) {
   auto args = std::make_shared<Args>();
   SceneTreeBenchParams& p = args->params;
   cmd->add_option("--objects", p.objects, "Objects of the generated city")->capture_default_str()->check(number_in(0, 1e12, true));
-  cmd->add_option("--seed", p.seed, "City and path seed")->capture_default_str();
+  cmd->add_option("--seed", p.seed, "City and path seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--frames", p.frames, "Frames of the walk")->capture_default_str()->check(number_in(0, 1e12, true));
   cmd->add_option("--fps", p.fps, "Path sampling rate (frames per second of walking)")->capture_default_str()->check(number_in(0, 1e12, true));
   cmd->add_option("--cell-size", p.cell_size, "View-cell side, metres")->capture_default_str()->check(number_in(0, 1e12, true));

@@ -32,10 +32,10 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--scale-cells", p.scale_cells_per_side, "Fig. 5.23: cells per side of each city's central block")->capture_default_str()->check(number_in(1, 64));
   cmd->add_option("--scale-eta", p.scale_eta, "Fig. 5.23: η of the searches")->capture_default_str()->check(number_in(0.0, 1.0));
   cmd->add_option("--render-rate", p.render_mtri_per_s, "Modelled rendering rate, M triangles/s")->capture_default_str()->check(number_in(0, 1e12, true));
-  cmd->add_option("--cache-pages", p.cache_pages, "Node cache sizes of Exp. 1, pages")->capture_default_str();
-  cmd->add_option("--etas", p.etas, "η values of Exp. 2")->capture_default_str();
-  cmd->add_option("--walk-etas", p.walk_etas, "η values of Exp. 3")->capture_default_str();
-  cmd->add_option("--seed", p.seed, "City, query and path seed")->capture_default_str();
+  cmd->add_option("--cache-pages", p.cache_pages, "Node cache sizes of Exp. 1, pages")->capture_default_str()->check(number_in(0, 1e7));
+  cmd->add_option("--etas", p.etas, "η values of Exp. 2")->capture_default_str()->check(number_in(0, 1));
+  cmd->add_option("--walk-etas", p.walk_etas, "η values of Exp. 3")->capture_default_str()->check(number_in(0, 1));
+  cmd->add_option("--seed", p.seed, "City, query and path seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--threads", p.threads, "Worker threads for DoV (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_option("--out", p.out_dir, "Directory of the report (visual.md and visual/)")->capture_default_str();
   cmd->add_option("--work-dir", p.work_dir, "Where the world goes (default: a temporary directory)");

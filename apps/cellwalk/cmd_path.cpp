@@ -23,7 +23,7 @@ void register_path(CLI::App& root) {
       ->capture_default_str();
   cmd->add_option("--frames", args->params.frames, "Number of frames")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--fps", args->params.fps, "Frames per second of path time")->capture_default_str()->check(number_in(0.1, 1000));
-  cmd->add_option("--seed", args->params.seed, "Random seed")->capture_default_str();
+  cmd->add_option("--seed", args->params.seed, "Random seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->callback([args] {
     refuse_same_files({args->scene}, {args->out});
     args->params.kind = parse_session_kind(args->kind);
