@@ -216,9 +216,9 @@ std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const
     // Checked as floats: casting one beyond the integer's range is undefined.
     const float threshold = parts.size() > 2 ? parse_float(spec, parts[2]) : float(rules.threshold);
     const float depth = parts.size() > 3 ? parse_float(spec, parts[3]) : float(rules.max_depth);
-    if (threshold > 1e15f) fail("cells spec '" + spec + "'", "octree threshold must be at most 1e15 triangles");
+    if (threshold > 1e15f) fail("cells spec '" + spec + "'", "octree threshold must be at most 1e15 triangles; give a smaller THRESHOLD");
     if (depth > 10.0f)  // 8^10 leaves per root: far beyond what a run can compute
-      fail("cells spec '" + spec + "'", "octree depth must be at most 10");
+      fail("cells spec '" + spec + "'", "octree depth must be at most 10; give a smaller DEPTH");
     rules.threshold = uint64_t(threshold);
     rules.max_depth = uint32_t(depth);
     return make_octree_partition(region, rules, sampled_triangles(world), solid);

@@ -73,7 +73,7 @@ void check_json_depth(std::string_view json, size_t offset, const std::string& n
     } else if (c == '[' || c == '{') {
       if (++depth > kMaxJsonDepth)
         fail(name + "@" + std::to_string(offset + i), "JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
-                                                          " arrays and objects; no glTF needs that, so the file is damaged or hostile");
+                                                          " arrays and objects, which no glTF needs; re-export the model or remove the deep extras");
     } else if (c == ']' || c == '}') {
       --depth;
     }
