@@ -7,6 +7,7 @@
 #include <fstream>
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
 #include <unistd.h>
 
 namespace cellwalk::test {
@@ -52,10 +53,15 @@ TempDir::~TempDir() {
   std::filesystem::remove_all(path_, ec);
 }
 
+std::string cellwalk_binary() {
+  const char* other = std::getenv("CELLWALK_BINARY");
+  return other && *other ? other : CELLWALK_BINARY;
+}
+
 CommandResult run_cellwalk(const std::string& args) {
   CommandResult result;
   // Appended piece by piece: GCC 12 misreads `std::string(literal) + ...` as out of bounds.
-  std::string command = CELLWALK_BINARY;
+  std::string command = cellwalk_binary();
   command.append(" ").append(args).append(" 2>&1");
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) {

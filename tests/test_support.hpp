@@ -36,6 +36,9 @@ struct CommandResult {
   int exit_code = 0;
   std::string output;  // stdout and stderr together
 };
+// The cellwalk binary the tests run: this build's, or $CELLWALK_BINARY when set (to run the
+// command tests against another build, e.g. the one before a fix).
+std::string cellwalk_binary();
 // Runs the cellwalk binary with `args` (a shell-quoted string) and captures its output.
 CommandResult run_cellwalk(const std::string& args);
 

@@ -5,6 +5,7 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/store/store_report.hpp"
 
@@ -31,27 +32,27 @@ void register_store(CLI::App& bench) {
   auto args = std::make_shared<Args>();
   StoreBenchParams& p = args->params;
   cmd->add_option("--objects", p.objects, "Objects of the generated city measured")
-      ->capture_default_str();
+      ->capture_default_str()->check(number_in(1, 1e7));
   cmd->add_flag("--large", p.large,
                 "Also generate and build a ~10^8-triangle city (long; needs ~6 GB of disk)");
   cmd->add_option("--large-objects", p.large_objects, "Objects of the --large city")
-      ->capture_default_str();
-  cmd->add_option("--threads", p.threads, "Build threads (0 = all cores)")->capture_default_str();
+      ->capture_default_str()->check(number_in(1, 1e7));
+  cmd->add_option("--threads", p.threads, "Build threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_option("--frames", p.path_frames, "Frames of the walk recorded as the cache trace")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(0, 1e12, true));
   cmd->add_option("--rounds", p.io_rounds, "Interleaved rounds of each read and decode measurement")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(0, 1e12, true));
   cmd->add_option("--random-reads", p.random_reads, "Random 4 KiB reads per method and round")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(number_in(0, 1e12, true));
   cmd->add_option("--sequential-bytes", p.sequential_bytes, "Bytes per sequential read pass")
       ->capture_default_str();
   cmd->add_option("--budgets", p.budget_fractions,
                   "Cache budgets as fractions of the trace's working set")
       ->capture_default_str()
-      ->check(CLI::Range(1e-6, 1.0));
+      ->check(number_in(1e-6, 1.0));
   cmd->add_option("--out", p.out_dir, "Directory of the report (store.md and store/)")
       ->capture_default_str();
   cmd->add_option("--work-dir", p.work_dir,

@@ -6,6 +6,7 @@
 
 #include "cellwalk/index/rtree.hpp"
 #include "cellwalk/store/world.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 
@@ -23,16 +24,17 @@ void register_build(CLI::App& root) {
   auto args = std::make_shared<Args>();
   cmd->add_option("scene", args->scene, "Scene file (.cwscene) from generate or import")->required();
   cmd->add_option("-o,--output", args->out, "World file to write (.cww)")->required();
-  cmd->add_option("--page-size", args->params.page_size, "Page size in bytes (a power of two, 512 to 1 MiB)")->capture_default_str();
-  cmd->add_option("--lod-ratio", args->params.lod.ratio, "Triangles of each level relative to the previous")->capture_default_str()->check(CLI::Range(0.05f, 0.95f));
-  cmd->add_option("--lod-min-triangles", args->params.lod.min_triangles, "Stop making levels at this many triangles")->capture_default_str();
-  cmd->add_option("--position-bits", args->params.codec.position_bits, "Quantisation of positions, bits per axis")->capture_default_str()->check(CLI::Range(1, 16));
+  cmd->add_option("--page-size", args->params.page_size, "Page size in bytes (a power of two, 512 to 1 MiB)")->capture_default_str()->check(page_size_check());
+  cmd->add_option("--lod-ratio", args->params.lod.ratio, "Triangles of each level relative to the previous")->capture_default_str()->check(number_in(0.05, 0.95));
+  cmd->add_option("--lod-min-triangles", args->params.lod.min_triangles, "Stop making levels at this many triangles")->capture_default_str()->check(integer_in(1, 1000000000));
+  cmd->add_option("--position-bits", args->params.codec.position_bits, "Quantisation of positions, bits per axis")->capture_default_str()->check(integer_in(1, 16));
   cmd->add_flag("--zstd", args->params.codec.zstd, "Compress encoded geometry with zstd as well");
-  cmd->add_option("--threads", args->params.threads, "Worker threads (0 = all cores)")->capture_default_str();
-  cmd->add_option("--rtree-fanout", args->rtree.max_entries, "R-tree node fan-out M (0 = as many as fit a page)")->capture_default_str();
+  cmd->add_option("--threads", args->params.threads, "Worker threads (0 = all cores)")->capture_default_str()->check(thread_count());
+  cmd->add_option("--rtree-fanout", args->rtree.max_entries, "R-tree node fan-out M (0 = as many as fit a page)")->capture_default_str()->check(integer_in(0, 65536));
   cmd->add_flag("--rtree-str", args->str, "Pack the R-tree with Sort-Tile-Recursive instead of inserting (Ang-Tan split)");
   cmd->add_flag("--json", args->json, "Print the report as JSON");
   cmd->callback([args] {
+    refuse_same_files({args->scene}, {args->out});
     if (args->str) args->rtree.method = RTreeMethod::kStr;
     build_rtree({}, args->rtree, args->params.page_size);  // bad R-tree parameters fail before the build
     std::unique_ptr<Progress> progress;

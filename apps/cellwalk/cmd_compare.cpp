@@ -81,12 +81,12 @@ void register_compare(CLI::App& root) {
       "compare", "Render every k-th frame with one strategy or several and with ground truth; report the differences");
   auto args = std::make_shared<CompareArgs>();
   args->add_to(*cmd, "out/compare");
-  cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(CLI::PositiveNumber);
-  cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str();
+  cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(integer_in(1, 10000000));
+  cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str()->check(integer_in(0, 100000));
   cmd->callback([args] {
     World world(args->world);
-    CameraPath path = read_path(args->path);
-    args->make_output_folder();
+    const CameraPath path = args->read_checked_path(world);
+    const OutputFolder folder = args->make_output_folder();
     auto context = GlContext::headless();
     std::vector<ReplayOptions::Run> made = args->make_runs(world);
     std::vector<NamedFidelity> runs;

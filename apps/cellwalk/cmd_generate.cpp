@@ -1,13 +1,17 @@
 // cellwalk generate: streams a generated world into a scene file (and optionally OBJ / glTF
 // for inspection), printing what it wrote.
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/core/error.hpp"
 #include "cellwalk/scene/generators.hpp"
 #include "cellwalk/scene/import.hpp"
 #include "cellwalk/scene/scene_file.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"
@@ -36,8 +40,18 @@ class CountingSink : public ObjectSink {
   Progress& progress_;
 };
 
-void write_world(const std::string& what, const Output& out, uint64_t expected_objects,
-                 const std::function<SceneInfo(ObjectSink&)>& generate) {
+// Refuses, before anything is written, a world of more objects than kMaxObjects, estimated from
+// the parameters (the generators themselves would run for hours and fill the disk).
+void refuse_too_many(const std::string& what, double estimated_objects) {
+  if (estimated_objects > double(kMaxObjects))
+    fail(what, "these parameters make about " + std::to_string(uint64_t(estimated_objects)) +
+                   " objects, more than the most a generator writes (" + std::to_string(kMaxObjects) +
+                   "); use fewer or larger parts");
+}
+
+void write_world(const std::string& what, const Output& out, const std::vector<std::string>& inputs,
+                 uint64_t expected_objects, const std::function<SceneInfo(ObjectSink&)>& generate) {
+  refuse_same_files(inputs, {out.scene, out.obj, out.gltf});
   const Stopwatch clock;
   SceneWriter scene(out.scene);
   std::vector<ObjectSink*> sinks{&scene};
@@ -86,18 +100,22 @@ void register_city(CLI::App& generate, std::shared_ptr<Output> out) {
   CLI::App* cmd = add_generator(
       generate, "city",
       "HDoV thesis §3.3 cityscape: houses, towers and landmark bunnies on a street grid", out);
-  cmd->add_option("--objects", p->objects, "Number of objects")->capture_default_str();
+  cmd->add_option("--objects", p->objects, "Number of objects")->capture_default_str()
+      ->check(integer_in(1, int64_t(kMaxObjects)));
   cmd->add_option("--landmark-fraction", p->landmark_fraction,
                   "Fraction of objects that are landmarks")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1));
   cmd->add_option("--extent", p->extent,
                   "Side of the square city in metres (0: derived from --objects)")
-      ->capture_default_str();
-  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1e6));
+  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str()
+      ->check(integer_in(0, INT64_MAX));
   cmd->add_option("--landmark-mesh", p->landmark_mesh,
                   "Landmark model (OFF/PLY/OBJ/glTF; default: the CGAL bunny)");
   cmd->callback([p, out] {
-    write_world("city", *out, p->objects,
+    write_world("city", *out, {p->landmark_mesh}, p->objects,
                 [&](ObjectSink& sink) { return generate_city(*p, sink); });
   });
 }
@@ -107,27 +125,43 @@ void register_stratified_city(CLI::App& generate, std::shared_ptr<Output> out) {
   CLI::App* cmd = add_generator(generate, "stratified-city",
                                 "Random city of the stratified-rendering thesis, Appendix A", out);
   cmd->add_option("--max-height", p->max_height, "Maximum building height, metres")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1e4, true));
   cmd->add_option("--block-length", p->block_length, "Block length (X), metres")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1e4, true));
   cmd->add_option("--block-width", p->block_width, "Block width (Z), metres")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1e4, true));
   cmd->add_option("--rows", p->rows_per_block, "Most building rows per block")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 1000));
   cmd->add_option("--columns", p->columns_per_block, "Most building columns per row")
-      ->capture_default_str();
-  cmd->add_option("--blocks-x", p->blocks_x, "Blocks along X")->capture_default_str();
-  cmd->add_option("--blocks-z", p->blocks_z, "Blocks along Z")->capture_default_str();
-  cmd->add_option("--street-width", p->street_width, "Street width, metres")->capture_default_str();
+      ->capture_default_str()
+      ->check(integer_in(1, 1000));
+  cmd->add_option("--blocks-x", p->blocks_x, "Blocks along X")->capture_default_str()
+      ->check(integer_in(1, 10000));
+  cmd->add_option("--blocks-z", p->blocks_z, "Blocks along Z")->capture_default_str()
+      ->check(integer_in(1, 10000));
+  cmd->add_option("--street-width", p->street_width, "Street width, metres")->capture_default_str()
+      ->check(number_in(0, 1e3, true));
   cmd->add_option("--street-height", p->street_height, "Street surface height, metres")
-      ->capture_default_str();
-  cmd->add_option("--curb-width", p->curb_width, "Curb width, metres")->capture_default_str();
-  cmd->add_option("--curb-height", p->curb_height, "Curb height, metres")->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 100));
+  cmd->add_option("--curb-width", p->curb_width, "Curb width, metres")->capture_default_str()
+      ->check(number_in(0, 1e3));
+  cmd->add_option("--curb-height", p->curb_height, "Curb height, metres")->capture_default_str()
+      ->check(number_in(0, 100));
   cmd->add_option("--tree-spacing", p->tree_spacing, "Distance between trees, metres (0: no trees)")
-      ->capture_default_str();
-  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1e4));
+  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->callback([p, out] {
-    write_world("stratified-city", *out, 0,
+    // Buildings fill each block's rows and columns; trees stand along both sides of every street.
+    const double blocks = double(p->blocks_x) * p->blocks_z;
+    const double trees = p->tree_spacing > 0 ? blocks * 4 * (p->block_length + p->block_width) / p->tree_spacing : 0;
+    refuse_too_many("stratified-city", blocks * p->rows_per_block * p->columns_per_block + trees);
+    write_world("stratified-city", *out, {}, 0,
                 [&](ObjectSink& sink) { return generate_stratified_city(*p, sink); });
   });
 }
@@ -136,13 +170,18 @@ void register_plant(CLI::App& generate, std::shared_ptr<Output> out) {
   auto p = std::make_shared<PlantParams>();
   CLI::App* cmd =
       add_generator(generate, "plant", "Industrial plant of process units between aisles", out);
-  cmd->add_option("--units-x", p->units_x, "Process units along X")->capture_default_str();
-  cmd->add_option("--units-z", p->units_z, "Process units along Z")->capture_default_str();
+  cmd->add_option("--units-x", p->units_x, "Process units along X")->capture_default_str()
+      ->check(integer_in(1, 10000));
+  cmd->add_option("--units-z", p->units_z, "Process units along Z")->capture_default_str()
+      ->check(integer_in(1, 10000));
   cmd->add_option("--detail", p->detail, "Scales tessellation and part counts, (0, 16]")
-      ->capture_default_str();
-  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 16, true));
+  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->callback([p, out] {
-    write_world("plant", *out, 0, [&](ObjectSink& sink) { return generate_plant(*p, sink); });
+    constexpr double kPlantObjectsPerUnit = 70;  // at detail 1, about proportional above (docs/generators.md)
+    refuse_too_many("plant", double(p->units_x) * p->units_z * kPlantObjectsPerUnit * std::max(1.0, p->detail));
+    write_world("plant", *out, {}, 0, [&](ObjectSink& sink) { return generate_plant(*p, sink); });
   });
 }
 
@@ -151,15 +190,20 @@ void register_grid(CLI::App& generate, std::shared_ptr<Output> out) {
   CLI::App* cmd =
       add_generator(generate, "grid", "Copies of one model on a lattice with lanes between", out);
   cmd->add_option("--mesh", p->mesh, "Model to copy (OFF/PLY/OBJ/glTF)")->required();
-  cmd->add_option("--nx", p->nx, "Copies along X")->capture_default_str();
-  cmd->add_option("--ny", p->ny, "Layers along Y")->capture_default_str();
-  cmd->add_option("--nz", p->nz, "Copies along Z")->capture_default_str();
+  cmd->add_option("--nx", p->nx, "Copies along X")->capture_default_str()
+      ->check(integer_in(1, 100000));
+  cmd->add_option("--ny", p->ny, "Layers along Y")->capture_default_str()
+      ->check(integer_in(1, 100000));
+  cmd->add_option("--nz", p->nz, "Copies along Z")->capture_default_str()
+      ->check(integer_in(1, 100000));
   cmd->add_option("--spacing", p->spacing, "Lattice pitch (0: 1.5 x the model's size, scaled to 1)")
-      ->capture_default_str();
-  cmd->add_option("--seed", p->seed, "Random seed (instance colours)")->capture_default_str();
+      ->capture_default_str()
+      ->check(number_in(0, 1e6));
+  cmd->add_option("--seed", p->seed, "Random seed (instance colours)")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->callback([p, out] {
     const uint64_t total = uint64_t(p->nx) * p->ny * p->nz;
-    write_world("grid", *out, total, [&](ObjectSink& sink) { return generate_grid(*p, sink); });
+    refuse_too_many("grid", double(total));
+    write_world("grid", *out, {p->mesh}, total, [&](ObjectSink& sink) { return generate_grid(*p, sink); });
   });
 }
 

@@ -11,6 +11,7 @@
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/scene/import.hpp"
 #include "cellwalk/scene/scene_file.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {
@@ -41,6 +42,7 @@ NavGraph loop_around(const Aabb& bounds) {
 }
 
 void run_import(const ImportOptions& opt) {
+  refuse_same_files(opt.inputs, {opt.output, opt.obj, opt.gltf});
   SceneWriter scene(opt.output);
   std::unique_ptr<ObjWriter> obj = opt.obj.empty() ? nullptr : std::make_unique<ObjWriter>(opt.obj);
   std::unique_ptr<GltfWriter> gltf =

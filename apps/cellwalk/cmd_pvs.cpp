@@ -9,6 +9,7 @@
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/precompute/engine.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "precompute/ground_truth.hpp"
@@ -103,8 +104,9 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
 }
 
 void run_merge(const Args& a, const World& world) {
-  const visibility::PvsMerge merged = visibility::merge_pvs_parts(a.merge, world);
   const std::string out = a.out.empty() ? a.world : a.out;
+  refuse_same_files(a.merge, {out});
+  const visibility::PvsMerge merged = visibility::merge_pvs_parts(a.merge, world);
   const visibility::PvsSizes sizes = visibility::write_world_with_pvs(world, out, *merged.partition, merged.sets, merged.run);
   if (a.json) {
     std::printf("%s\n", nlohmann::ordered_json({{"world", out}, {"parts", a.merge.size()}, {"sizes", sizes_json(sizes)}}).dump(2).c_str());
@@ -179,16 +181,16 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--shard", a->shard, "Compute only shard i of N equal cell-id ranges into a part file (i/N)");
   cmd->add_option("--merge", a->merge, "Merge the part files of every shard into the world")->expected(1, -1);
   cmd->add_option("-o,--output", a->out, "World to write (default: WORLD in place; WORLD.part-i-of-N for a shard)");
-  cmd->add_option("--check", a->check, "Check the engine against ground truth on this many cells; write nothing");
-  cmd->add_option("--truth-points", a->gt_points, "Ground truth: random points per cell besides the 8 corners")->capture_default_str();
-  cmd->add_option("--truth-resolution", a->gt_resolution, "Ground truth: cube-map face resolution")->capture_default_str();
-  cmd->add_option("--points", a->options.sample_points, "Sampling: random points per cell")->capture_default_str();
-  cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str();
-  cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str();
-  cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str();
-  cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str();
+  cmd->add_option("--check", a->check, "Check the engine against ground truth on this many cells; write nothing")->check(integer_in(0, 1000000));
+  cmd->add_option("--truth-points", a->gt_points, "Ground truth: random points per cell besides the 8 corners")->capture_default_str()->check(integer_in(0, 100000));
+  cmd->add_option("--truth-resolution", a->gt_resolution, "Ground truth: cube-map face resolution")->capture_default_str()->check(integer_in(16, 4096));
+  cmd->add_option("--points", a->options.sample_points, "Sampling: random points per cell")->capture_default_str()->check(integer_in(1, 100000));
+  cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str()->check(integer_in(1, 10000000));
+  cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str()->check(integer_in(0, 10000));
+  cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str()->check(integer_in(0, 8));
+  cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str()->check(integer_in(4, 4096));
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
-  cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str();
+  cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_flag("--json", a->json, "Print the report as JSON");
   cmd->callback([a] {
     const World world(a->world);

@@ -5,6 +5,7 @@
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/runtime/walk.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 #include "lens_options.hpp"
 
@@ -21,14 +22,17 @@ void register_render(CLI::App& root) {
   cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
   cmd->add_option("-o,--output", args->out, "PNG to write")->required();
   cmd->add_option("--path", args->path, "Camera path; without it, an overview from above the scene");
-  cmd->add_option("--frame", args->frame, "Frame of the path to render")->capture_default_str();
+  cmd->add_option("--frame", args->frame, "Frame of the path to render")->capture_default_str()->check(integer_in(0, 10000000));
   cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
   args->lens.add_to(*cmd);
   cmd->callback([args] {
+    args->lens.check();
+    refuse_same_files({args->world, args->path}, {args->out});
     World world(args->world);
     Camera camera = args->lens.lens();
     if (!args->path.empty()) {
       CameraPath path = read_path(args->path);
+      warn_if_other_world(path, args->path, world.info(), args->world);
       if (args->frame < 0 || size_t(args->frame) >= path.frames.size())
         fail(args->path, "frame " + std::to_string(args->frame) + " is outside the path's " +
                              std::to_string(path.frames.size()) + " frames");

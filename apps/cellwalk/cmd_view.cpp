@@ -2,6 +2,7 @@
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/strategy/strategy.hpp"
 #include "cellwalk/runtime/viewer.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 
 namespace cellwalk::app {
@@ -17,15 +18,16 @@ void register_view(CLI::App& root) {
   auto args = std::make_shared<Args>();
   cmd->add_option("world", args->scene, "World file (.cww)")->required();
   cmd->add_option("--strategy", args->options.strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
-  cmd->add_option("--width", args->options.width, "Window width")->capture_default_str();
-  cmd->add_option("--height", args->options.height, "Window height")->capture_default_str();
-  cmd->add_option("--fov", args->options.fov_y_deg, "Vertical field of view, degrees")->capture_default_str();
+  cmd->add_option("--width", args->options.width, "Window width")->capture_default_str()->check(integer_in(16, 8192));
+  cmd->add_option("--height", args->options.height, "Window height")->capture_default_str()->check(integer_in(16, 8192));
+  cmd->add_option("--fov", args->options.fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));
   cmd->add_option("--record", args->options.record_file, "Record the flown path to this file from the start (R stops/starts; default file recorded.path)");
   cmd->add_option("--replay", args->options.replay_file, "Follow this path file instead of the keyboard");
-  cmd->add_option("--frames", args->options.max_frames, "Quit after this many frames (0 = run until closed)")->capture_default_str();
+  cmd->add_option("--frames", args->options.max_frames, "Quit after this many frames (0 = run until closed)")->capture_default_str()->check(integer_in(0, 100000000));
   cmd->add_option("--screenshot", args->options.screenshot_file, "Write the last frame to this PNG on exit");
   cmd->add_flag("--birds-eye", args->options.birds_eye, "Start in the bird's-eye view");
   cmd->callback([args] {
+    refuse_same_files({args->scene, args->options.replay_file}, {args->options.record_file, args->options.screenshot_file});
     World world(args->scene);
     run_viewer(world, args->options);
   });

@@ -6,6 +6,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/systems/visual/visual_strategy.hpp"
+#include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 
@@ -21,13 +22,14 @@ void register_visual_build(CLI::App& root) {
   auto a = std::make_shared<Args>();
   cmd->add_option("world", a->world, "World file (.cww) with DoVs (cellwalk pvs WORLD --engine dov)")->required();
   cmd->add_option("-o,--output", a->out, "Tree file (default: WORLD.hdov)");
-  cmd->add_option("--fanout", a->params.max_entries, "R-tree fan-out M")->capture_default_str()->check(CLI::Range(4, 140));
-  cmd->add_option("--lod-levels", a->params.lods.levels, "Internal LODs per node")->capture_default_str()->check(CLI::Range(1, 8));
-  cmd->add_option("--lod-ratio", a->params.lods.ratio, "Triangles of each internal LOD / the previous")->capture_default_str()->check(CLI::Range(0.05, 0.95));
+  cmd->add_option("--fanout", a->params.max_entries, "R-tree fan-out M")->capture_default_str()->check(integer_in(4, 140));
+  cmd->add_option("--lod-levels", a->params.lods.levels, "Internal LODs per node")->capture_default_str()->check(integer_in(1, 8));
+  cmd->add_option("--lod-ratio", a->params.lods.ratio, "Triangles of each internal LOD / the previous")->capture_default_str()->check(number_in(0.05, 0.95));
   cmd->add_flag("--json", a->json, "Print the report as JSON");
   cmd->callback([a] {
-    const World world(a->world);
     const std::string out = a->out.empty() ? default_hdov_path(a->world) : a->out;
+    refuse_same_files({a->world}, {out});
+    const World world(a->world);
     std::unique_ptr<Progress> progress;
     const HdovTreeBuild built = build_visual_tree(world, out, a->params, [&](uint64_t done, uint64_t total) {
       if (!progress) progress = std::make_unique<Progress>("HDoV-tree", total);

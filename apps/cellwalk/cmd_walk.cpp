@@ -68,8 +68,8 @@ void register_walk(CLI::App& root) {
   args->add_to(*cmd, "out/walk");
   cmd->callback([args] {
     World world(args->world);
-    CameraPath path = read_path(args->path);
-    args->make_output_folder();
+    const CameraPath path = args->read_checked_path(world);
+    const OutputFolder folder = args->make_output_folder();
     auto context = GlContext::headless();
     std::vector<ReplayOptions::Run> made = args->make_runs(world);
     std::vector<WalkSummary> runs;

@@ -4,7 +4,9 @@
 #include <CLI/CLI.hpp>
 
 #include "cellwalk/core/camera.hpp"
+#include "cellwalk/core/error.hpp"
 #include "cellwalk/render/renderer.hpp"
+#include "checks.hpp"
 
 namespace cellwalk::app {
 
@@ -18,13 +20,19 @@ struct LensOptions {
   bool flat_background = false;
 
   void add_to(CLI::App& cmd) {
-    cmd.add_option("--width", width, "Image width in pixels")->capture_default_str()->check(CLI::Range(16, 8192));
-    cmd.add_option("--height", height, "Image height in pixels")->capture_default_str()->check(CLI::Range(16, 8192));
-    cmd.add_option("--fov", fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(CLI::Range(1.0f, 170.0f));
-    cmd.add_option("--near", near_plane, "Near plane, metres")->capture_default_str()->check(CLI::PositiveNumber);
-    cmd.add_option("--far", far_plane, "Far plane, metres")->capture_default_str()->check(CLI::PositiveNumber);
-    cmd.add_option("--gpu-budget", gpu_budget_mib, "GPU buffer cache budget, MiB")->capture_default_str()->check(CLI::NonNegativeNumber);
+    cmd.add_option("--width", width, "Image width in pixels")->capture_default_str()->check(integer_in(16, 8192));
+    cmd.add_option("--height", height, "Image height in pixels")->capture_default_str()->check(integer_in(16, 8192));
+    cmd.add_option("--fov", fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));
+    cmd.add_option("--near", near_plane, "Near plane, metres")->capture_default_str()->check(number_in(0, 1e6, true));
+    cmd.add_option("--far", far_plane, "Far plane, metres")->capture_default_str()->check(number_in(0, 1e7, true));
+    cmd.add_option("--gpu-budget", gpu_budget_mib, "GPU buffer cache budget, MiB")->capture_default_str()->check(number_in(0, 1 << 20));
     cmd.add_flag("--flat-background", flat_background, "Plain background instead of sky and ground");
+  }
+  // The lens as a whole: each bound holds alone, but a far plane before the near one draws nothing.
+  void check() const {
+    if (!(far_plane > near_plane))
+      fail("--near " + std::to_string(near_plane) + " --far " + std::to_string(far_plane),
+           "the far plane must lie beyond the near plane; give a larger --far or a smaller --near");
   }
   Camera lens() const {
     Camera c;

@@ -14,6 +14,7 @@
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/strategy/strategy.hpp"
 #include "cellwalk/store/world.hpp"
+#include "checks.hpp"
 #include "lens_options.hpp"
 
 namespace cellwalk::app {
@@ -41,19 +42,25 @@ struct ReplayOptions {
     cmd.add_option("-o,--output", out, "Output folder")->capture_default_str();
     cmd.add_option("--budget", budget_mib, "Memory budget for the strategy, MiB (0 = none); never exceeded")
         ->capture_default_str()
-        ->check(CLI::NonNegativeNumber);
-    cmd.add_option("--eta", eta, "hdov-vsc: DoV threshold η (HDoV thesis §5.3)")->capture_default_str()->check(CLI::NonNegativeNumber);
-    cmd.add_option("--polygon-budget", polygon_budget, "hdov-pb: triangles per frame (HDoV thesis §6.1.2)")->capture_default_str()->check(CLI::PositiveNumber);
+        ->check(number_in(0, 1 << 24));
+    cmd.add_option("--eta", eta, "hdov-vsc: DoV threshold η (HDoV thesis §5.3)")->capture_default_str()->check(number_in(0, 1));
+    cmd.add_option("--polygon-budget", polygon_budget, "hdov-pb: triangles per frame (HDoV thesis §6.1.2)")->capture_default_str()->check(integer_in(1, 1000000000));
     cmd.add_flag("--no-dov-levels", no_dov_levels, "hdov-vsc, hdov-pb: no level lowered by DoV (eq. 5.6, PB's λ)");
     cmd.add_flag("--json", json, "Print the summary as JSON");
     lens.add_to(cmd);
   }
-  // Creates the output folder, before any work, so a bad --output fails at once.
-  void make_output_folder() const {
-    std::error_code ec;
-    std::filesystem::create_directories(out, ec);
-    if (ec || !std::filesystem::is_directory(out)) fail(out, "cannot create the output folder: " + ec.message());
+  // The checks of a replay before any work: the lens, an output folder that is not an input
+  // file, and the path's world (a warning: a path may be reused on purpose).
+  CameraPath read_checked_path(const World& opened) const {
+    lens.check();
+    refuse_same_files({world, path}, {out});
+    CameraPath p = read_path(path);
+    warn_if_other_world(p, path, opened.info(), world);
+    return p;
   }
+  // Creates the output folder, before any work, so a bad --output fails at once; the folders it
+  // made are removed again if the run fails before writing into them (OutputFolder).
+  OutputFolder make_output_folder() const { return OutputFolder(out); }
   // One run per --strategy, in order, each strategy made here once, so a bad name or a budget a
   // strategy refuses fails before any run. A run's label is the strategy's own name (its
   // settings spelled out), or, where two names coincide (REVIEW's settings are not in its

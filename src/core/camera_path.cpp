@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -13,9 +14,29 @@ namespace cellwalk {
 
 namespace {
 constexpr const char* kHeader = "# cellwalk path 1";
+constexpr const char* kWorldTag = "# world ";
+
+// "# world <name> <identity>": the identity is the last word, the name everything before it.
+PathWorld parse_world_line(const std::string& line, const std::string& where) {
+  const std::string rest = line.substr(std::string(kWorldTag).size());
+  const size_t space = rest.find_last_of(' ');
+  if (space == std::string::npos || space == 0 || space + 1 == rest.size())
+    fail(where, "expected \"# world <name> <identity>\"; fix or delete the line");
+  return {rest.substr(0, space), rest.substr(space + 1)};
 }
+// Exactly version 1: a later version may mean something else by the same numbers.
+void check_header(const std::string& line, const std::string& where) {
+  const std::string family = "# cellwalk path ";
+  if (line == kHeader) return;
+  if (line.rfind(family, 0) == 0)
+    fail(where, "path format version '" + line.substr(family.size()) + "' is not supported; only \"" + kHeader +
+                    "\" is (regenerate the path with this cellwalk)");
+  fail(where, "not a cellwalk path file (the first line must be \"" + std::string(kHeader) + "\")");
+}
+}  // namespace
 
 CameraPath read_path(const std::string& file) {
+  if (std::filesystem::is_directory(file)) fail(file, "is a directory, not a path file; give the path file written by cellwalk path");
   std::ifstream in(file);
   if (!in) fail(file, "cannot open path file");
   CameraPath path;
@@ -24,8 +45,9 @@ CameraPath read_path(const std::string& file) {
   while (std::getline(in, line)) {
     ++number;
     const std::string where = file + ":" + std::to_string(number);
-    if (number == 1 && line.rfind("# cellwalk path", 0) != 0)
-      fail(where, "not a cellwalk path file (the first line must be \"" + std::string(kHeader) + "\")");
+    const std::string trimmed = line.substr(0, line.find_last_not_of(" \t\r") + 1);
+    if (number == 1) check_header(trimmed, where);
+    if (trimmed.rfind(kWorldTag, 0) == 0) path.world = parse_world_line(trimmed, where);
     if (line.empty() || line[0] == '#') continue;
     std::istringstream fields(line);
     PathFrame f;
@@ -47,7 +69,9 @@ CameraPath read_path(const std::string& file) {
 
 void write_path(const CameraPath& path, const std::string& file) {
   std::ostringstream out;
-  out << kHeader << "\n# time x y z yaw_deg pitch_deg\n";
+  out << kHeader << "\n";
+  if (path.world.known()) out << kWorldTag << path.world.name << ' ' << path.world.identity << "\n";
+  out << "# time x y z yaw_deg pitch_deg\n";
   out.precision(9);
   for (const PathFrame& f : path.frames)
     out << f.time << ' ' << f.position.x << ' ' << f.position.y << ' ' << f.position.z << ' '

@@ -10,6 +10,7 @@
 #include <mutex>
 #include <thread>
 
+#include "cellwalk/core/error.hpp"
 #include "cellwalk/render/renderer.hpp"
 
 namespace cellwalk::visibility {
@@ -39,8 +40,14 @@ struct CubeMapRenderer::Impl {
 
   Impl(const World& w, int r) : world(w), resolution(r) {
     far_plane = 2.0f * glm::length(w.info().bounds.size()) + 10.0f;
+    std::future<void> ready = started.get_future();
     thread = std::thread([this] { run(); });
-    started.get_future().get();  // rethrows a failed context creation here, in the caller
+    try {
+      ready.get();  // rethrows a failed context creation here, in the caller
+    } catch (...) {
+      thread.join();  // the thread has returned; a joinable thread would std::terminate here
+      throw;
+    }
   }
 
   ~Impl() {
@@ -106,8 +113,18 @@ struct CubeMapRenderer::Impl {
   }
 };
 
+namespace {
+// A face is one square framebuffer: at least a pixel, at most what any GL driver allocates.
+int checked_resolution(int resolution) {
+  if (resolution < 1 || resolution > kMaxCubeResolution)
+    fail("cube map", "face resolution " + std::to_string(resolution) + " must lie in [1, " +
+                         std::to_string(kMaxCubeResolution) + "]; give a resolution such as 256");
+  return resolution;
+}
+}  // namespace
+
 CubeMapRenderer::CubeMapRenderer(const World& world, int resolution)
-    : resolution_(resolution), impl_(std::make_unique<Impl>(world, resolution)) {}
+    : resolution_(checked_resolution(resolution)), impl_(std::make_unique<Impl>(world, resolution)) {}
 
 CubeMapRenderer::~CubeMapRenderer() = default;
 

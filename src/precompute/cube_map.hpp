@@ -13,6 +13,10 @@ namespace cellwalk::visibility {
 
 using CubeIds = std::array<IdImage, 6>;
 
+// The largest face resolution a CubeMapRenderer accepts (an Error names anything outside
+// [1, kMaxCubeResolution], before any GL work).
+constexpr int kMaxCubeResolution = 8192;
+
 // Renders on a thread of its own that owns the headless GL context, so any thread may call
 // render(); calls are served one at a time (llvmpipe already uses every core per frame).
 // Meshes are the world's level 0, decoded on demand and kept in the renderer's GPU cache.

@@ -10,6 +10,8 @@
 #include <xxhash.h>
 
 #include <cerrno>
+#include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -31,10 +33,22 @@ float parse_float(const std::string& spec, const std::string& text) {
   try {
     size_t used = 0;
     const float v = std::stof(text, &used);
-    if (used == text.size() && v > 0.0f) return v;
+    if (used == text.size() && v > 0.0f && std::isfinite(v)) return v;
   } catch (const std::exception&) {
   }
-  fail("cells spec '" + spec + "'", "'" + text + "' is not a positive number");
+  fail("cells spec '" + spec + "'", "'" + text + "' is not a finite positive number");
+}
+
+// "i/N" exactly: two whole numbers, 0 <= i < N, nothing before or after.
+void parse_shard(const std::string& text, int& shard, int& shards) {
+  const size_t slash = text.find('/');
+  const auto whole = [&](size_t from, size_t to, int& out) {
+    const auto [stop, error] = std::from_chars(text.data() + from, text.data() + to, out);
+    return from < to && error == std::errc() && stop == text.data() + to;
+  };
+  if (slash == std::string::npos || !whole(0, slash, shard) || !whole(slash + 1, text.size(), shards) ||
+      shards < 1 || shard < 0 || shard >= shards)
+    fail("--shard '" + text + "'", "expected i/N with 0 <= i < N, e.g. 0/4");
 }
 
 std::vector<std::string> split_colons(const std::string& s) {
@@ -199,8 +213,14 @@ std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const
   if (kind == "octree" && parts.size() <= 4) {
     OctreeRules rules;
     if (parts.size() > 1) rules.root_size = parse_float(spec, parts[1]);
-    if (parts.size() > 2) rules.threshold = uint64_t(parse_float(spec, parts[2]));
-    if (parts.size() > 3) rules.max_depth = uint32_t(parse_float(spec, parts[3]));
+    // Checked as floats: casting one beyond the integer's range is undefined.
+    const float threshold = parts.size() > 2 ? parse_float(spec, parts[2]) : float(rules.threshold);
+    const float depth = parts.size() > 3 ? parse_float(spec, parts[3]) : float(rules.max_depth);
+    if (threshold > 1e15f) fail("cells spec '" + spec + "'", "octree threshold must be at most 1e15 triangles; give a smaller THRESHOLD");
+    if (depth > 10.0f)  // 8^10 leaves per root: far beyond what a run can compute
+      fail("cells spec '" + spec + "'", "octree depth must be at most 10; give a smaller DEPTH");
+    rules.threshold = uint64_t(threshold);
+    rules.max_depth = uint32_t(depth);
     return make_octree_partition(region, rules, sampled_triangles(world), solid);
   }
   fail("cells spec '" + spec + "'", "expected grid:SIZE, grid3d:SIZE, kd:SIZE or octree[:ROOT[:THRESHOLD[:DEPTH]]]");
@@ -217,8 +237,7 @@ PvsRun make_pvs_run(const VisibilityEngine& engine, const std::string& cells_spe
                  (run.conservative ? " refine=" + std::to_string(o.refine_levels) : "") +
                  (o.dov_midpoint_weights ? " midpoint" : "");
   run.threads = threads;
-  if (!shard.empty() && std::sscanf(shard.c_str(), "%d/%d", &run.shard, &run.shards) != 2)
-    fail("--shard '" + shard + "'", "expected i/N, e.g. 0/4");
+  if (!shard.empty()) parse_shard(shard, run.shard, run.shards);
   return run;
 }
 

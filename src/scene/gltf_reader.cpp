@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <string_view>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -52,6 +53,38 @@ void check_glb_framing(Bytes b, const std::string& name) {
     if (chunk == 0 && type != 0x4E4F534Au) fail_at(at + 4, "first GLB chunk is not JSON");
     at += 8 + length;
   }
+}
+
+// tinygltf's JSON parser recurses once per array or object level, so a small file of deeply
+// nested brackets overflows the stack; a linear pre-scan bounds the depth before it parses.
+constexpr int kMaxJsonDepth = 64;
+
+void check_json_depth(std::string_view json, size_t offset, const std::string& name) {
+  int depth = 0;
+  bool in_string = false, escaped = false;
+  for (size_t i = 0; i < json.size(); ++i) {
+    const char c = json[i];
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth)
+        fail(name + "@" + std::to_string(offset + i), "JSON nested deeper than " + std::to_string(kMaxJsonDepth) +
+                                                          " arrays and objects, which no glTF needs; re-export the model or remove the deep extras");
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+}
+
+// The JSON of a .gltf (the whole file) or of a GLB (its first chunk, framing already checked).
+void check_json_depth_of(Bytes b, bool glb, const std::string& name) {
+  const auto* text = reinterpret_cast<const char*>(b.data());
+  if (!glb) return check_json_depth(std::string_view(text, b.size()), 0, name);
+  if (b.size() >= 20) check_json_depth(std::string_view(text + 20, std::min<size_t>(le32(b, 12), b.size() - 20)), 20, name);
 }
 
 // Buffers are read from files only below `base_dir`, and only when it is set.
@@ -102,6 +135,7 @@ tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& ba
   const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
   if (glb) check_glb_framing(bytes, name);
   if (bytes.size() > UINT32_MAX) fail(name, "file larger than 4 GiB");
+  check_json_depth_of(bytes, glb, name);
   FileAccess access{base_dir.empty() ? std::filesystem::path()
                                      : std::filesystem::path(base_dir).lexically_normal()};
   tinygltf::TinyGLTF loader;

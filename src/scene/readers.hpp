@@ -77,6 +77,7 @@ class TextCursor {
   [[noreturn]] void fail(std::string_view what) const;
 
  private:
+  void check_not_utf16(Bytes bytes) const;
   void skip_blanks_in_line();
 
   std::string_view text_;

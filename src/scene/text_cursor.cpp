@@ -22,7 +22,21 @@ std::string_view drop_plus(std::string_view token) {
 TextCursor::TextCursor(Bytes bytes, std::string name, char comment)
     : text_(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
       name_(std::move(name)),
-      comment_(comment) {}
+      comment_(comment) {
+  check_not_utf16(bytes);
+}
+
+// Text saved as UTF-16 (Windows editors do) reads as one long token with NULs between the
+// letters, which would be reported as a file without vertices; say what it is instead.
+void TextCursor::check_not_utf16(Bytes bytes) const {
+  if (bytes.size() < 2) return;
+  const bool bom = (bytes[0] == 0xFF && bytes[1] == 0xFE) || (bytes[0] == 0xFE && bytes[1] == 0xFF);
+  if (bom)
+    fail("the file is UTF-16 text; convert it to UTF-8 (iconv -f UTF-16 -t UTF-8 IN > OUT) and import that");
+  if (bytes[0] == 0 || bytes[1] == 0)
+    fail("the file starts with NUL bytes: UTF-16 text without a byte-order mark, or not text; convert it to UTF-8 "
+                       "(iconv -f UTF-16LE -t UTF-8 IN > OUT)");
+}
 
 void TextCursor::skip_blanks_in_line() {
   while (pos_ < text_.size() && is_blank(text_[pos_])) ++pos_;

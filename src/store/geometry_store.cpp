@@ -1,5 +1,6 @@
 #include "cellwalk/store/geometry_store.hpp"
 
+#include "cellwalk/core/byte_size.hpp"
 #include "cellwalk/core/error.hpp"
 #include "core/stopwatch.hpp"
 
@@ -33,10 +34,9 @@ GeometryStore::GeometryStore(const World& world, uint64_t budget_bytes, std::uni
       budget_(budget_bytes == 0 ? 0 : budget_bytes > load_headroom_ ? budget_bytes - load_headroom_ : 1),
       directory_bytes_(world.resident_bytes()) {
   if (budget_bytes != 0 && budget_bytes < directory_bytes_ + load_headroom_)
-    fail(world.file().path(), "memory budget of " + std::to_string(budget_bytes >> 20) +
-                                  " MiB is too small: the world's directory and its largest level need " +
-                                  std::to_string((directory_bytes_ + load_headroom_ + (1 << 20) - 1) >> 20) +
-                                  " MiB; give a larger --budget");
+    fail(world.file().path(), "memory budget of " + byte_size_text(budget_bytes) +
+                                  " is too small: the world's directory and its largest level need " +
+                                  byte_size_text(directory_bytes_ + load_headroom_) + "; give a larger --budget");
   if (!budget_.try_reserve(directory_bytes_)) fail(world.file().path(), "internal: directory does not fit the budget");
   buffer_ = std::make_unique<BufferManager>(budget_, policy ? std::move(policy) : make_lru_policy());
   peak_ = resident_bytes();

@@ -4,6 +4,8 @@
 #include "visibility/cell_tree.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <string>
 
 #include "cellwalk/core/error.hpp"
 #include "core/bytes.hpp"
@@ -153,9 +155,19 @@ Aabb RootGrid::root_box(int i, int j, int k) const {
   return b;
 }
 
+namespace {
+// "0.001", "192.6": a size in a message, not "0.001000".
+std::string short_number(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", double(v));
+  return text;
+}
+}  // namespace
+
 RootGrid root_grid(const CellRegion& region, float size) {
-  if (!(size > 0.0f)) fail("view cells", "the cell size must be positive");
+  if (!(size > 0.0f) || !std::isfinite(size)) fail("view cells", "the cell size must be a finite positive number of metres");
   RootGrid g;
+  double total = 1.0;  // cells so far, in double so a tiny size cannot overflow the count
   g.bounds = region.bounds;
   if (region.two_d) {
     g.bounds.min.y = region.eye_min;
@@ -164,7 +176,13 @@ RootGrid root_grid(const CellRegion& region, float size) {
   for (int a = 0; a < 3; ++a) {
     const float extent = std::max(g.bounds.max[a] - g.bounds.min[a], 0.0f);
     const bool whole = region.two_d && a == 1;
-    g.dims[a] = whole ? 1 : std::max(1, int(std::ceil(extent / size - 1e-4f)));
+    const double cells = whole ? 1.0 : std::max(1.0, double(std::ceil(extent / size - 1e-4f)));
+    total *= cells;
+    if (total > double(kMaxGridCells))
+      fail("view cells", "cells of " + short_number(size) + " m over a region of " + short_number(region.bounds.size().x) +
+                             " x " + short_number(region.bounds.size().z) + " m make more than " +
+                             std::to_string(kMaxGridCells) + " cells; use larger cells");
+    g.dims[a] = int(cells);
     g.step[a] = whole ? std::max(extent, 1e-6f) : size;
   }
   return g;

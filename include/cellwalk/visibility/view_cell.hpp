@@ -61,8 +61,13 @@ CellRegion default_cell_region(const Aabb& bounds, const NavGraph& nav, bool two
 // are marked solid, get no visible set and are never subdivided. Empty: nothing is solid.
 using SolidTest = std::function<bool(const Aabb&)>;
 
+// The most cells of a grid (and of the root grid of a kd-tree or octree): more would take days to
+// compute and gigabytes to hold, so a finer cell size is refused before any cell is made.
+constexpr uint64_t kMaxGridCells = 1'000'000;
+
 // A uniform grid of cubes of side `cell_size` (the last row/column may be shorter) covering the
-// region. REQUIRES: cell_size > 0.
+// region. A cell size that is not finite and positive, or one making more than kMaxGridCells
+// cells, fails with an Error.
 std::unique_ptr<ViewCellPartition> make_grid_partition(const CellRegion& region, float cell_size,
                                                        const SolidTest& solid = {});
 

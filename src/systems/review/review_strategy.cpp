@@ -3,6 +3,7 @@
 // F' = F + k·v (§4.2.5) and ViewCulling of the object buffer (§4.3). docs/review.md.
 #include <algorithm>
 
+#include "cellwalk/core/byte_size.hpp"
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/store/prefetcher.hpp"
 #include "cellwalk/systems/review/review.hpp"
@@ -98,10 +99,10 @@ struct ReviewStrategy::Impl {
     const uint64_t b = options.memory_budget_bytes;
     const uint64_t need = fixed_bytes + index + std::max(largest, config.object_buffer_bytes);
     if (b != 0 && b < need)
-      fail(world.file().path(), "memory budget of " + std::to_string(b >> 20) + " MiB is too small for REVIEW: the "
+      fail(world.file().path(), "memory budget of " + byte_size_text(b) + " is too small for REVIEW: the "
                                 "directory, the index cache and " +
                                     std::string(config.object_buffer_bytes ? "the object buffer" : "the largest object") +
-                                    " need " + std::to_string((need + (1 << 20) - 1) >> 20) + " MiB");
+                                    " need " + byte_size_text(need) + "; give a larger --budget");
     if (config.object_buffer_bytes) {
       if (config.object_buffer_bytes < largest)
         fail(world.file().path(), "object buffer of " + std::to_string(config.object_buffer_bytes) +

@@ -3,6 +3,7 @@
 // PB), draw the selected leaves and internal LODs.
 #include "systems/scene_tree/scene_tree_strategy.hpp"
 
+#include "cellwalk/core/byte_size.hpp"
 #include "cellwalk/core/error.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"
@@ -52,8 +53,8 @@ SceneTreeStrategy::SceneTreeStrategy(const World& world, const StrategyOptions& 
   const uint64_t budget = options.memory_budget_bytes;
   if (budget > 0 && fixed_bytes_ >= budget)
     fail(name() + " --budget", "the scene tree, its internal LODs and visibility data need " +
-                                   std::to_string(fixed_bytes_ >> 20) + " MiB resident, more than the budget of " +
-                                   std::to_string(budget >> 20) + " MiB");
+                                   byte_size_text(fixed_bytes_) + " resident, more than the budget of " +
+                                   byte_size_text(budget) + "; give a larger --budget");
   store_ = std::make_unique<GeometryStore>(world, budget > 0 ? budget - fixed_bytes_ : 0);
 }
 

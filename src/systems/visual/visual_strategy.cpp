@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "cellwalk/core/byte_size.hpp"
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/store/geometry_store.hpp"
 #include "cellwalk/systems/visual/visual_strategy.hpp"
@@ -60,8 +61,8 @@ struct VisualStrategy::Impl {
     fixed = tree->resident_bytes() + cache + largest_segment(*tree, c.scheme) + sizeof(*this);
     const uint64_t budget = options.memory_budget_bytes;
     if (budget > 0 && fixed >= budget)
-      fail("visual --budget", "the HDoV-tree's directory, node cache and V-page segment need " + std::to_string(fixed >> 10) +
-                                  " KiB, more than the budget of " + std::to_string(budget >> 10) + " KiB");
+      fail("visual --budget", "the HDoV-tree's directory, node cache and V-page segment need " + byte_size_text(fixed) +
+                                  ", more than the budget of " + byte_size_text(budget) + "; give a larger --budget");
     // What is left: a quarter for internal LODs, the rest for the objects' levels.
     const uint64_t rest = budget > 0 ? budget - fixed : 0;
     lod_budget = std::make_unique<MemoryBudget>(rest / 4);
