@@ -34,7 +34,8 @@ class TempDir {
 
 struct CommandResult {
   int exit_code = 0;
-  std::string output;  // stdout and stderr together
+  std::string output;          // stdout and stderr together
+  uint64_t max_rss_bytes = 0;  // the command's peak resident memory, from the kernel (wait4)
 };
 // Runs the cellwalk binary with `args` (a shell-quoted string) and captures its output.
 CommandResult run_cellwalk(const std::string& args);
