@@ -13,11 +13,20 @@ void ReplayOptions::check_strategies() const {
   }
 }
 
+namespace {
+
+// "review" of "review:depth=60", "visual" of "visual": runs of one family may share a name.
+std::string family(const std::string& given) { return given.substr(0, given.find(':')); }
+
+}  // namespace
+
 ReplayOptions::Run ReplayOptions::make_run(const std::string& given, const World& world, const RunBudget& budget,
                                            std::vector<std::string>& labels_used) const {
   Run run{"", make_strategy(given, world, strategy_options(budget))};
+  const auto same_family = std::count_if(strategies.begin(), strategies.end(),
+                                         [&](const std::string& s) { return family(s) == family(given); });
   const std::string name = run.strategy->name();
-  run.label = std::count(labels_used.begin(), labels_used.end(), name) > 0 ? given : name;
+  run.label = same_family > 1 || std::count(labels_used.begin(), labels_used.end(), name) > 0 ? given : name;
   labels_used.push_back(run.label);
   return run;
 }

@@ -71,7 +71,9 @@ struct ReplayOptions {
   }
   // One run of a --strategy: its strategy, made once, right before the run, and released after
   // it (so runs never hold memory at once). The label is the strategy's own name (its settings
-  // spelled out), or the text as given where an earlier run of this command has that name.
+  // spelled out), or the text as given where two --strategy of one family (the text before
+  // ':') could share a name — REVIEW's settings are not all in its name — or an earlier run
+  // already has it.
   struct Run {
     std::string label;
     std::unique_ptr<Strategy> strategy;

@@ -104,7 +104,12 @@ const GpuMesh* GpuMeshCache::insert(const MeshKey& key, const Mesh& mesh) {
 }
 
 void GpuMeshCache::make_room(uint64_t bytes) {
-  while (held_bytes() + bytes > budget_ && !entries_.empty()) evict_least_recent();
+  if (held_bytes() + bytes <= budget_) return;
+  // Evicting moves bytes from resident to retired: room appears once the GPU has finished, so
+  // each wait frees a quarter of the budget beyond what this mesh needs, and the next inserts
+  // fill it without waiting again.
+  const uint64_t target = budget_ - std::min(budget_, budget_ / 4 + bytes);
+  while (resident_bytes_ > target && !entries_.empty()) evict_least_recent();
   if (held_bytes() + bytes > budget_ && retired_bytes_ > 0) {
     glFinish();  // queued draws release the evicted buffers' storage
     gpu_finished();
