@@ -269,6 +269,8 @@ TEST_F(RendererTest, CacheStaysUnderBudgetAndEvictsLeastRecentlyUsed) {
     render::MeshKey key{id % 50, id / 50};
     if (cache.find(key) == nullptr) cache.insert(key, mesh);
     ASSERT_LE(cache.resident_bytes(), budget);
+    // Evicted buffers may still be read by queued draws: they count until the GPU finishes.
+    ASSERT_LE(cache.held_bytes(), budget);
   }
   // Recently inserted keys are resident; keeping one in use protects it from eviction.
   render::MeshKey kept{49, 3};
@@ -279,6 +281,8 @@ TEST_F(RendererTest, CacheStaysUnderBudgetAndEvictsLeastRecentlyUsed) {
     ASSERT_LE(cache.resident_bytes(), budget);
   }
   EXPECT_EQ(cache.find({0, 0}), nullptr);
+  cache.gpu_finished();
+  EXPECT_EQ(cache.held_bytes(), cache.resident_bytes());
 }
 
 TEST_F(RendererTest, MeshLargerThanTheBudgetIsDrawnButNotKept) {

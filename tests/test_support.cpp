@@ -1,6 +1,7 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 
 #include <array>
@@ -63,16 +64,27 @@ CommandResult run_cellwalk(const std::string& args) {
   // Appended piece by piece: GCC 12 misreads `std::string(literal) + ...` as out of bounds.
   std::string command = cellwalk_binary();
   command.append(" ").append(args).append(" 2>&1");
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) {
-    result.exit_code = -1;
-    return result;
+  // fork + exec rather than popen, so wait4 reports the command's peak memory from outside it.
+  int fds[2];
+  if (pipe(fds) != 0) return {-1, "pipe failed", 0};
+  const pid_t child = fork();
+  if (child == 0) {
+    dup2(fds[1], STDOUT_FILENO);
+    close(fds[0]);
+    close(fds[1]);
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
   }
+  close(fds[1]);
   std::array<char, 4096> buffer;
-  size_t n;
-  while ((n = fread(buffer.data(), 1, buffer.size(), pipe)) > 0) result.output.append(buffer.data(), n);
-  int status = pclose(pipe);
+  ssize_t n;
+  while ((n = read(fds[0], buffer.data(), buffer.size())) > 0) result.output.append(buffer.data(), size_t(n));
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  if (child < 0 || wait4(child, &status, 0, &usage) != child) return {-1, result.output, 0};
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.max_rss_bytes = uint64_t(usage.ru_maxrss) * 1024;  // ru_maxrss is in KiB on Linux
   return result;
 }
 

@@ -34,7 +34,8 @@ class TempDir {
 
 struct CommandResult {
   int exit_code = 0;
-  std::string output;  // stdout and stderr together
+  std::string output;          // stdout and stderr together
+  uint64_t max_rss_bytes = 0;  // the command's peak resident memory, from the kernel (wait4)
 };
 // The cellwalk binary the tests run: this build's, or $CELLWALK_BINARY when set (to run the
 // command tests against another build, e.g. the one before a fix).

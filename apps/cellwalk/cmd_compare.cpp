@@ -36,11 +36,14 @@ nlohmann::ordered_json labelled_json(const std::string& label, const FidelitySum
 std::string psnr_text(double db) { return std::isfinite(db) ? bench::fixed(db, 1) : "inf (identical)"; }
 
 NamedFidelity compare_one(const CompareArgs& args, const World& world, const CameraPath& path,
-                          ReplayOptions::Run& run) {
+                          const RunBudget& budget, const std::string& given, std::vector<std::string>& labels) {
+  ReplayOptions::Run run = args.make_run(given, world, budget, labels);
   const std::string& label = run.label;
-  const std::unique_ptr<Strategy> strategy = std::move(run.strategy);  // released after its run
+  const std::unique_ptr<Strategy> strategy = std::move(run.strategy);
+  // The ground truth is outside the budget: it holds every object it draws (`walk` is the
+  // command whose process stays within --budget).
   auto truth = make_strategy("ground-truth", world, {});
-  Renderer renderer(args.lens.render_settings());
+  Renderer renderer(args.render_settings(budget));
   CompareOptions options = args.options;
   options.image_dir = options.max_images > 0 ? args.out : "";
   options.label = label;
@@ -84,13 +87,16 @@ void register_compare(CLI::App& root) {
   cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str()->check(integer_in(0, 100000));
   cmd->callback([args] {
+    args->check_strategies();
     World world(args->world);
     const CameraPath path = args->read_checked_path(world);
     const OutputFolder folder = args->make_output_folder();
     auto context = GlContext::headless();
-    std::vector<ReplayOptions::Run> made = args->make_runs(world);
+    const RunBudget budget = args->run_budget(path.frames.size());
+    std::vector<std::string> labels;
     std::vector<NamedFidelity> runs;
-    for (ReplayOptions::Run& run : made) runs.push_back(compare_one(*args, world, path, run));
+    for (const std::string& given : args->strategies)
+      runs.push_back(compare_one(*args, world, path, budget, given, labels));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const auto& run : runs) all.push_back(labelled_json(run.strategy, run.summary));

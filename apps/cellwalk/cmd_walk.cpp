@@ -4,7 +4,9 @@
 #include <filesystem>
 
 #include "cellwalk/core/atomic_file.hpp"
+#include "cellwalk/core/process_memory.hpp"
 #include "cellwalk/metrics/walk_summary.hpp"
+#include "cellwalk/runtime/run_budget.hpp"
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/store/world.hpp"
@@ -17,32 +19,38 @@ namespace cellwalk::app {
 namespace {
 
 // One strategy over the path, with a renderer of its own so no strategy inherits another's
-// GPU buffers.
-WalkSummary walk_one(const ReplayOptions& args, const CameraPath& path, ReplayOptions::Run& run) {
-  const StrategyOptions options = args.strategy_options();
+// GPU buffers. The process's peak is measured from the strategy's construction to its release.
+WalkSummary walk_one(const ReplayOptions& args, const World& world, const CameraPath& path, const RunBudget& budget,
+                     uint64_t baseline, const std::string& given, std::vector<std::string>& labels) {
+  reset_peak_rss();
+  Renderer renderer(args.render_settings(budget));
+  ReplayOptions::Run run = args.make_run(given, world, budget, labels);
   const std::string& label = run.label;
-  const std::unique_ptr<Strategy> strategy = std::move(run.strategy);  // released after its run
-  Renderer renderer(args.lens.render_settings());
+  const std::unique_ptr<Strategy> strategy = std::move(run.strategy);
   Progress progress("walk " + label, path.frames.size());
   auto frames = walk(path, args.lens.lens(), *strategy, renderer,
                      [&](size_t done, size_t) { progress.update(done); });
   progress.finish();
   WalkSummary summary = summarize(label, frames);
   summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
-  summary.budget_bytes = options.memory_budget_bytes;
+  summary.budget_bytes = budget.total_bytes;
+  summary.strategy_budget_bytes = budget.strategy_bytes;
+  summary.gpu_budget_bytes = renderer.settings().gpu_budget_bytes;
+  summary.baseline_rss_bytes = baseline;
+  summary.peak_rss_bytes = peak_rss_bytes();
   const std::string stem = args.out + "/" + label;
   write_frames_csv(frames, stem + ".csv");
   write_summary_json(summary, stem + ".json");
   if (!args.json)
     std::printf("walk %s: %zu frames, frame time mean %.2f ms (sd %.2f, p95 %.2f), %.0f triangles/frame,\n"
                 "  split query %.2f / io %.2f / decode %.2f / render %.2f ms, %.1f MiB read, peak resident %.1f MiB%s\n"
-                "  wrote %s.csv and %s.json\n",
+                "  process peak %.1f MiB over a baseline of %.1f MiB; wrote %s.csv and %s.json\n",
                 summary.strategy.c_str(), summary.frames, summary.mean_ms, summary.stddev_ms, summary.p95_ms,
                 summary.frames ? double(summary.total_triangles) / summary.frames : 0.0, summary.mean_query_ms,
                 summary.mean_io_ms, summary.mean_decode_ms, summary.mean_render_ms,
                 summary.total_bytes_read / 1048576.0, summary.peak_resident_bytes / 1048576.0,
                 summary.budget_bytes ? (" (budget " + bench::fixed(summary.budget_bytes / 1048576.0, 1) + " MiB)").c_str() : "",
-                stem.c_str(), stem.c_str());
+                summary.peak_rss_bytes / 1048576.0, summary.baseline_rss_bytes / 1048576.0, stem.c_str(), stem.c_str());
   return summary;
 }
 
@@ -67,13 +75,18 @@ void register_walk(CLI::App& root) {
   auto args = std::make_shared<ReplayOptions>();
   args->add_to(*cmd, "out/walk");
   cmd->callback([args] {
-    World world(args->world);
-    const CameraPath path = args->read_checked_path(world);
+    args->check_strategies();
     const OutputFolder folder = args->make_output_folder();
+    // The baseline is measured before the world and the path are read: they are charged.
     auto context = GlContext::headless();
-    std::vector<ReplayOptions::Run> made = args->make_runs(world);
+    const uint64_t baseline = measure_baseline(args->lens.render_settings());
+    const World world(args->world);
+    const CameraPath path = args->read_checked_path(world);
+    const RunBudget budget = args->run_budget(path.frames.size());
+    std::vector<std::string> labels;
     std::vector<WalkSummary> runs;
-    for (ReplayOptions::Run& run : made) runs.push_back(walk_one(*args, path, run));
+    for (const std::string& given : args->strategies)
+      runs.push_back(walk_one(*args, world, path, budget, baseline, given, labels));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const WalkSummary& s : runs) all.push_back(nlohmann::ordered_json::parse(to_json(s)));

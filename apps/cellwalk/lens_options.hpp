@@ -18,6 +18,9 @@ struct LensOptions {
   float far_plane = 5000.0f;
   double gpu_budget_mib = 512.0;
   bool flat_background = false;
+  CLI::Option* gpu_option = nullptr;
+
+  bool gpu_budget_given() const { return gpu_option != nullptr && gpu_option->count() > 0; }
 
   void add_to(CLI::App& cmd) {
     cmd.add_option("--width", width, "Image width in pixels")->capture_default_str()->check(integer_in(16, 8192));
@@ -25,7 +28,10 @@ struct LensOptions {
     cmd.add_option("--fov", fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));
     cmd.add_option("--near", near_plane, "Near plane, metres")->capture_default_str()->check(number_in(0, 1e6, true));
     cmd.add_option("--far", far_plane, "Far plane, metres")->capture_default_str()->check(number_in(0, 1e7, true));
-    cmd.add_option("--gpu-budget", gpu_budget_mib, "GPU buffer cache budget, MiB")->capture_default_str()->check(number_in(0, 1 << 20));
+    gpu_option = cmd.add_option("--gpu-budget", gpu_budget_mib,
+                                "GPU buffer cache budget, MiB (with --budget: part of it, default a quarter)")
+                     ->capture_default_str()
+                     ->check(number_in(0, 1 << 20));
     cmd.add_flag("--flat-background", flat_background, "Plain background instead of sky and ground");
   }
   // The lens as a whole: each bound holds alone, but a far plane before the near one draws nothing.

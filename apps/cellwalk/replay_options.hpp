@@ -6,11 +6,13 @@
 
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "cellwalk/core/error.hpp"
 
+#include "cellwalk/runtime/run_budget.hpp"
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/strategy/strategy.hpp"
 #include "cellwalk/store/world.hpp"
@@ -61,19 +63,33 @@ struct ReplayOptions {
   // Creates the output folder, before any work, so a bad --output fails at once; the folders it
   // made are removed again if the run fails before writing into them (OutputFolder).
   OutputFolder make_output_folder() const { return OutputFolder(out); }
-  // One run per --strategy, in order, each strategy made here once, so a bad name or a budget a
-  // strategy refuses fails before any run. A run's label is the strategy's own name (its
-  // settings spelled out), or, where two names coincide (REVIEW's settings are not in its
-  // name), the text as given. Callers release each strategy after its run.
+  // Checks every --strategy's name and settings before any run, so a typo fails at once.
+  void check_strategies() const;
+  // The budget of a run over `frames` frames: --budget is the process's (run_budget.hpp).
+  RunBudget run_budget(size_t frames) const {
+    const std::optional<uint64_t> gpu =
+        lens.gpu_budget_given() ? std::optional<uint64_t>(lens.render_settings().gpu_budget_bytes) : std::nullopt;
+    return split_run_budget(static_cast<uint64_t>(budget_mib * 1024 * 1024), frames, gpu);
+  }
+  RenderSettings render_settings(const RunBudget& budget) const {
+    RenderSettings s = lens.render_settings();
+    if (budget.total_bytes > 0) s.gpu_budget_bytes = budget.gpu_bytes;
+    return s;
+  }
+  // One run of a --strategy: its strategy, made once, right before the run, and released after
+  // it (so runs never hold memory at once). The label is the strategy's own name (its settings
+  // spelled out), or the text as given where two --strategy of one family (the text before
+  // ':') could share a name — REVIEW's settings are not all in its name — or an earlier run
+  // already has it.
   struct Run {
-    std::string name;   // as given to --strategy
     std::string label;
     std::unique_ptr<Strategy> strategy;
   };
-  std::vector<Run> make_runs(const World& world) const;
-  StrategyOptions strategy_options() const {
+  Run make_run(const std::string& given, const World& world, const RunBudget& budget,
+               std::vector<std::string>& labels_used) const;
+  StrategyOptions strategy_options(const RunBudget& budget) const {
     StrategyOptions options;
-    options.memory_budget_bytes = static_cast<uint64_t>(budget_mib * 1024 * 1024);
+    options.memory_budget_bytes = budget.strategy_bytes;
     options.eta = eta;
     options.polygon_budget = polygon_budget;
     options.dov_levels = !no_dov_levels;

@@ -24,4 +24,11 @@ uint64_t status_kib(const char* field) {
 uint64_t peak_rss_bytes() { return status_kib("VmHWM:") * 1024; }
 uint64_t current_rss_bytes() { return status_kib("VmRSS:") * 1024; }
 
+bool reset_peak_rss() {
+  FILE* f = std::fopen("/proc/self/clear_refs", "w");
+  if (!f) return false;
+  const bool written = std::fputs("5", f) >= 0;
+  return std::fclose(f) == 0 && written;
+}
+
 }  // namespace cellwalk

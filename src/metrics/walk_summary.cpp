@@ -88,7 +88,11 @@ std::string to_json(const WalkSummary& s) {
       {"stalls", s.stalls},
       {"peak_resident_bytes", s.peak_resident_bytes},
       {"budget_bytes", s.budget_bytes},
-      {"peak_gpu_bytes", s.peak_gpu_bytes}};
+      {"strategy_budget_bytes", s.strategy_budget_bytes},
+      {"gpu_budget_bytes", s.gpu_budget_bytes},
+      {"peak_gpu_bytes", s.peak_gpu_bytes},
+      {"baseline_rss_bytes", s.baseline_rss_bytes},
+      {"peak_rss_bytes", s.peak_rss_bytes}};
   return j.dump(2);
 }
 

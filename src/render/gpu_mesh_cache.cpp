@@ -96,15 +96,29 @@ const GpuMesh* GpuMeshCache::insert(const MeshKey& key, const Mesh& mesh) {
   assert(index_.count(key) == 0);
   uint64_t bytes = GpuMesh::bytes_for(mesh);
   assert(bytes <= budget_);
-  while (resident_bytes_ + bytes > budget_) evict_least_recent();
+  make_room(bytes);
   entries_.emplace_front(key, GpuMesh(mesh));
   index_.emplace(key, entries_.begin());
   resident_bytes_ += bytes;
   return &entries_.front().second;
 }
 
+void GpuMeshCache::make_room(uint64_t bytes) {
+  if (held_bytes() + bytes <= budget_) return;
+  // Evicting moves bytes from resident to retired: room appears once the GPU has finished, so
+  // each wait frees a quarter of the budget beyond what this mesh needs, and the next inserts
+  // fill it without waiting again.
+  const uint64_t target = budget_ - std::min(budget_, budget_ / 4 + bytes);
+  while (resident_bytes_ > target && !entries_.empty()) evict_least_recent();
+  if (held_bytes() + bytes > budget_ && retired_bytes_ > 0) {
+    glFinish();  // queued draws release the evicted buffers' storage
+    gpu_finished();
+  }
+}
+
 void GpuMeshCache::evict_least_recent() {
   assert(!entries_.empty());
+  retired_bytes_ += entries_.back().second.bytes();
   resident_bytes_ -= entries_.back().second.bytes();
   index_.erase(entries_.back().first);
   entries_.pop_back();

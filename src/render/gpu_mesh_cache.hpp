@@ -58,10 +58,13 @@ struct MeshKeyHash {
   }
 };
 
-// Invariant: resident_bytes() <= budget() at every moment, including during an insert (room is
-// made before the upload). Deleting a buffer that a queued draw still reads is safe in GL: the
-// name dies at once, the storage lives until the commands using it complete (OpenGL 4.5 core
-// §5.1.3), so entries drawn earlier in the same frame may be evicted.
+// Invariant: held_bytes() <= budget() at every moment, including during an insert (room is made
+// before the upload), except while one mesh larger than the whole budget is drawn from a
+// transient buffer with nothing else held. Deleting a buffer that a queued draw still reads is
+// safe in GL: the name dies at once, the storage lives until the commands using it complete
+// (OpenGL 4.5 core §5.1.3). So buffers evicted (or drawn transiently) in the current frame still
+// hold memory — host memory on llvmpipe — until the GPU finishes: they are counted as retired,
+// and when the budget needs their room the cache waits for the GPU (glFinish) to free them.
 class GpuMeshCache {
  public:
   explicit GpuMeshCache(uint64_t budget_bytes) : budget_(budget_bytes) {}
@@ -71,9 +74,17 @@ class GpuMeshCache {
   // Evicts least recently used meshes until `mesh` fits, then uploads and keeps it.
   // REQUIRES: `key` is not resident and GpuMesh::bytes_for(mesh) <= budget().
   const GpuMesh* insert(const MeshKey& key, const Mesh& mesh);
+  // Room for a transient buffer of `bytes` (which may exceed the budget: then nothing else stays
+  // held), and, once the caller has queued its draw, counts it retired.
+  void make_room(uint64_t bytes);
+  void retire(uint64_t bytes) { retired_bytes_ += bytes; }
+  // The GPU has finished every queued command (the renderer calls glFinish): retired storage is free.
+  void gpu_finished() { retired_bytes_ = 0; }
 
   uint64_t budget() const { return budget_; }
   uint64_t resident_bytes() const { return resident_bytes_; }
+  // Resident plus retired: the memory the cache's buffers take now.
+  uint64_t held_bytes() const { return resident_bytes_ + retired_bytes_; }
   size_t size() const { return entries_.size(); }
 
  private:
@@ -83,6 +94,7 @@ class GpuMeshCache {
 
   uint64_t budget_;
   uint64_t resident_bytes_ = 0;
+  uint64_t retired_bytes_ = 0;
   Entries entries_;
   std::unordered_map<MeshKey, Entries::iterator, MeshKeyHash> index_;
 };

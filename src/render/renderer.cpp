@@ -239,7 +239,9 @@ struct Renderer::Impl {
     if (bytes <= cache.budget()) {
       draw(*cache.insert(key, *mesh), item);
     } else {
+      cache.make_room(bytes);
       draw(render::GpuMesh(*mesh), item);  // transient: deleted after the draw is queued
+      cache.retire(bytes);
     }
     return true;
   }
@@ -306,6 +308,7 @@ RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> ite
     previous = item;
   }
   glFinish();
+  impl_->cache.gpu_finished();
   stats.gpu_resident_bytes = impl_->cache.resident_bytes();
   stats.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

@@ -13,6 +13,22 @@ std::vector<std::string> strategy_names() {
   return {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]"};
 }
 
+namespace {
+
+[[noreturn]] void unknown_strategy(const std::string& name) {
+  unknown_strategy(name);
+}
+
+}  // namespace
+
+void check_strategy_name(const std::string& name) {
+  for (const char* plain : {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb"})
+    if (name == plain) return;
+  if (is_review_strategy_name(name)) return void(parse_review_strategy_name(name));
+  if (is_visual_strategy_name(name)) return void(parse_visual_strategy_name(name));
+  unknown_strategy(name);
+}
+
 std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& world,
                                         const StrategyOptions& options) {
   if (name == "brute") return std::make_unique<BruteStrategy>(world, options, true);
@@ -22,9 +38,7 @@ std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& wo
   if (is_review_strategy_name(name)) return std::make_unique<ReviewStrategy>(world, parse_review_strategy_name(name), options);
   if (is_visual_strategy_name(name)) return std::make_unique<VisualStrategy>(world, parse_visual_strategy_name(name), options);
   if (name == "hdov-pb") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kPb);
-  std::string known;
-  for (const auto& n : strategy_names()) known += (known.empty() ? "" : ", ") + n;
-  fail("strategy \"" + name + "\"", "unknown; choose one of " + known);
+  unknown_strategy(name);
 }
 
 }  // namespace cellwalk

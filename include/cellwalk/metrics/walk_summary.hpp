@@ -19,8 +19,15 @@ struct WalkSummary {
   uint64_t stalls = 0;
   uint64_t peak_resident_bytes = 0;  // the strategy's exact peak (set by the caller), or the
                                      // largest per-frame value
-  uint64_t budget_bytes = 0;         // the memory budget the walk ran under (0: none)
+  uint64_t budget_bytes = 0;         // the process budget the walk ran under (0: none)
+  uint64_t strategy_budget_bytes = 0;  // its parts (cellwalk/runtime/run_budget.hpp)
+  uint64_t gpu_budget_bytes = 0;
   uint64_t peak_gpu_bytes = 0;
+  // The process: its fixed baseline (code, GL driver, framebuffers, measured before the world
+  // opens) and its peak resident bytes during this run, measured by the kernel (VmHWM). With a
+  // budget, peak_rss_bytes <= budget_bytes + baseline_rss_bytes is what the budget promises.
+  uint64_t baseline_rss_bytes = 0;
+  uint64_t peak_rss_bytes = 0;
 };
 
 WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>& frames);

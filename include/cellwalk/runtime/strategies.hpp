@@ -13,6 +13,10 @@ namespace cellwalk {
 // Names accepted by make_strategy, for --help and errors.
 std::vector<std::string> strategy_names();
 
+// Throws the Error make_strategy would for an unknown name or malformed settings, without
+// opening anything: lets a command check every --strategy before its first run.
+void check_strategy_name(const std::string& name);
+
 // REQUIRES: `world` outlives the strategy. Throws Error on an unknown name.
 std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& world,
                                         const StrategyOptions& options);

@@ -1,0 +1,76 @@
+// The process budget of a run, split between the strategy, the GPU cache and the path
+// (cellwalk/runtime/run_budget.hpp).
+#include "cellwalk/runtime/run_budget.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/process_memory.hpp"
+
+namespace cellwalk {
+
+namespace {
+
+std::string mib(uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / 1048576.0);
+  return text;
+}
+
+// A fan of `triangles` triangles over the screen centre, coloured or not.
+Mesh warm_up_mesh(bool colored, int triangles) {
+  Mesh mesh;
+  mesh.positions.push_back(Vec3(0.0f, 0.0f, 0.0f));
+  for (int i = 0; i <= triangles; ++i) {
+    const float a = 6.2831853f * float(i) / float(triangles);
+    mesh.positions.push_back(Vec3(std::cos(a), std::sin(a), 0.0f));
+  }
+  for (uint32_t i = 1; i <= uint32_t(triangles); ++i) mesh.indices.insert(mesh.indices.end(), {0u, i, i + 1});
+  if (colored) mesh.colors.assign(mesh.positions.size(), rgba8(90, 160, 220));
+  return mesh;
+}
+
+}  // namespace
+
+RunBudget split_run_budget(uint64_t total_bytes, uint64_t frames, std::optional<uint64_t> gpu_bytes) {
+  if (total_bytes == 0) return {};
+  RunBudget b;
+  b.total_bytes = total_bytes;
+  b.frames_bytes = frames * kBytesPerFrame;
+  b.gpu_bytes = gpu_bytes ? *gpu_bytes : uint64_t(double(total_bytes) * kGpuBudgetShare);
+  if (b.gpu_bytes + b.frames_bytes >= total_bytes)
+    fail("--budget " + mib(total_bytes), "the GPU cache (" + mib(b.gpu_bytes) + ") and the path's " +
+                                             std::to_string(frames) + " frames (" + mib(b.frames_bytes) +
+                                             ") leave nothing for the strategy; give a larger budget or a smaller --gpu-budget");
+  b.strategy_bytes = total_bytes - b.gpu_bytes - b.frames_bytes;
+  return b;
+}
+
+uint64_t measure_baseline(const RenderSettings& settings) {
+  // Fans of 64 to 8192 triangles, with and without vertex colours: kWarmUpTriangles a frame.
+  std::vector<Mesh> meshes;
+  std::vector<DrawItem> items;
+  uint64_t triangles = 0, bytes = 0;
+  for (uint32_t i = 0; triangles < kWarmUpTriangles; ++i) {
+    meshes.push_back(warm_up_mesh(i % 2 == 0, 64 << (i % 8)));
+    items.push_back({i, 0, rgba8(200, 200, 200), DrawKind::kPatch});
+    triangles += meshes.back().triangle_count();
+    bytes += meshes.back().byte_size();
+  }
+  // A GPU cache an eighth of the set's size, so the driver also frees and reuses buffers.
+  RenderSettings churn = settings;
+  churn.gpu_budget_bytes = bytes / 8;
+  Renderer renderer(churn);
+  Camera camera;
+  camera.position = Vec3(0.0f, 0.0f, 3.0f);
+  for (int frame = 0; frame < kWarmUpFrames; ++frame)
+    renderer.render(camera, items, [&](const DrawItem& item) { return &meshes[item.id]; });
+  meshes.clear();
+  meshes.shrink_to_fit();
+  return current_rss_bytes();
+}
+
+}  // namespace cellwalk
