@@ -76,6 +76,8 @@ void register_walk(CLI::App& root) {
   args->add_to(*cmd, "out/walk");
   cmd->callback([args] {
     args->check_strategies();
+    args->lens.check();
+    refuse_same_files({args->world, args->path}, {args->out});
     const OutputFolder folder = args->make_output_folder();
     // The baseline is measured before the world and the path are read: they are charged.
     auto context = GlContext::headless();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "cellwalk/core/byte_size.hpp"
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/process_memory.hpp"
 
@@ -14,11 +15,6 @@ namespace cellwalk {
 
 namespace {
 
-std::string mib(uint64_t bytes) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / 1048576.0);
-  return text;
-}
 
 // A fan of `triangles` triangles over the screen centre, coloured or not.
 Mesh warm_up_mesh(bool colored, int triangles) {
@@ -42,9 +38,10 @@ RunBudget split_run_budget(uint64_t total_bytes, uint64_t frames, std::optional<
   b.frames_bytes = frames * kBytesPerFrame;
   b.gpu_bytes = gpu_bytes ? *gpu_bytes : uint64_t(double(total_bytes) * kGpuBudgetShare);
   if (b.gpu_bytes + b.frames_bytes >= total_bytes)
-    fail("--budget " + mib(total_bytes), "the GPU cache (" + mib(b.gpu_bytes) + ") and the path's " +
-                                             std::to_string(frames) + " frames (" + mib(b.frames_bytes) +
-                                             ") leave nothing for the strategy; give a larger budget or a smaller --gpu-budget");
+    fail("--budget", "a memory budget of " + byte_size_text(total_bytes) + " is too small: the GPU cache (" +
+                         byte_size_text(b.gpu_bytes) + ") and the path's " + std::to_string(frames) + " frames (" +
+                         byte_size_text(b.frames_bytes) +
+                         ") leave nothing for the strategy; give a larger --budget or a smaller --gpu-budget");
   b.strategy_bytes = total_bytes - b.gpu_bytes - b.frames_bytes;
   return b;
 }
