@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include <set>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/core/process_memory.hpp"
 #include "render/gpu_mesh_cache.hpp"
 #include "test_support.hpp"
 
@@ -283,6 +285,57 @@ TEST_F(RendererTest, CacheStaysUnderBudgetAndEvictsLeastRecentlyUsed) {
   EXPECT_EQ(cache.find({0, 0}), nullptr);
   cache.gpu_finished();
   EXPECT_EQ(cache.held_bytes(), cache.resident_bytes());
+}
+
+// A mesh of more than two driver batches is drawn in index ranges with waits between them:
+// every triangle still lands, so its ids are exactly those of the same box in 12 triangles.
+TEST_F(RendererTest, MeshOfSeveralDriverBatchesDrawsEveryTriangle) {
+  const int n = 105;  // 6 faces × 2n² = 132,300 triangles
+  ASSERT_GT(12u * n * n, 2 * kDriverBatchTriangles);
+  Meshes meshes;
+  meshes.add(1, make_box(Vec3(0.0f), Vec3(2.0f, 1.5f, 1.0f), n));
+  meshes.add(2, make_box(Vec3(0.0f), Vec3(2.0f, 1.5f, 1.0f)));
+  Renderer renderer(settings());
+  Camera camera = test_camera();
+  camera.position = Vec3(1.0f, 0.7f, 6.0f);  // off axis: several faces show
+  const RenderStats fine = renderer.render(camera, std::vector<DrawItem>{{1}}, meshes.provider());
+  const IdImage tessellated = renderer.read_ids();
+  renderer.render(camera, std::vector<DrawItem>{{2}}, meshes.provider());
+  const IdImage whole = renderer.read_ids();
+  EXPECT_EQ(fine.triangles, 12u * n * n);
+  size_t covered = 0, differ = 0;
+  for (size_t i = 0; i < whole.ids.size(); ++i) {
+    covered += whole.ids[i] != kBackgroundId;
+    differ += (whole.ids[i] != kBackgroundId) != (tessellated.ids[i] != kBackgroundId);
+  }
+  EXPECT_GT(covered, whole.ids.size() / 10);
+  EXPECT_EQ(differ, 0u);
+}
+
+// llvmpipe keeps the memory it bins triangles into; without a wait every driver batch, a frame
+// of two million long thin triangles grew the process by about 480 MiB at 640 × 480.
+TEST_F(RendererTest, DriverMemoryDoesNotGrowWithTheTrianglesOfAFrame) {
+  Mesh fan;
+  fan.positions.push_back(Vec3(0.0f));
+  const uint32_t spokes = 1u << 16;
+  for (uint32_t i = 0; i <= spokes; ++i) {
+    const float a = 6.2831853f * float(i) / float(spokes);
+    fan.positions.push_back(Vec3(20.0f * std::cos(a), 20.0f * std::sin(a), 0.0f));
+  }
+  for (uint32_t i = 1; i <= spokes; ++i) fan.indices.insert(fan.indices.end(), {0u, i, i + 1});
+  Meshes meshes;
+  meshes.add(1, fan);
+  std::vector<DrawItem> items;
+  for (uint32_t copy = 0; copy < 32; ++copy) items.push_back({1});
+  RenderSettings s = settings();
+  s.width = 640;
+  s.height = 480;
+  Renderer renderer(s);
+  renderer.render(test_camera(), std::vector<DrawItem>{{1}}, meshes.provider());  // shaders, one batch
+  const uint64_t before = current_rss_bytes();
+  const RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.triangles, 32u * spokes);
+  EXPECT_LT(current_rss_bytes(), before + (48ull << 20)) << "the driver's memory grew with the frame";
 }
 
 TEST_F(RendererTest, MeshLargerThanTheBudgetIsDrawnButNotKept) {

@@ -215,8 +215,21 @@ struct Renderer::Impl {
                          item.color >> 16 & 0xFF, item.color >> 24);
     }
     glProgramUniform1ui(program, render::kObjectIdUniform, pixel_id(item));
-    glDrawElements(GL_TRIANGLES, GLsizei(mesh.index_count()), GL_UNSIGNED_INT,
-                   reinterpret_cast<const void*>(uintptr_t(mesh.index_offset())));
+    for (uint32_t first = 0; first < mesh.index_count();) {
+      const uint32_t count = std::min(mesh.index_count() - first, 3 * (kDriverBatchTriangles - queued_triangles));
+      glDrawElements(GL_TRIANGLES, GLsizei(count), GL_UNSIGNED_INT,
+                     reinterpret_cast<const void*>(uintptr_t(mesh.index_offset() + sizeof(uint32_t) * first)));
+      first += count;
+      queued_triangles += count / 3;
+      if (queued_triangles == kDriverBatchTriangles) finish();
+    }
+  }
+
+  // Waits for the GPU: the driver's binned triangles and the retired buffers are freed.
+  void finish() {
+    glFinish();
+    cache.gpu_finished();
+    queued_triangles = 0;
   }
 
   // Draws one item from the cache, asking the provider on a miss. Returns false if skipped.
@@ -290,6 +303,7 @@ struct Renderer::Impl {
   GLuint backdrop_program = 0;
   std::vector<const DrawItem*> order;
   std::vector<render::OverlayVertex> overlay_vertices;
+  uint32_t queued_triangles = 0;  // since the last finish(); at most kDriverBatchTriangles
 };
 
 Renderer::Renderer(const RenderSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
@@ -307,8 +321,7 @@ RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> ite
     if (previous == nullptr || previous->kind != item->kind || previous->id != item->id) ++stats.objects;
     previous = item;
   }
-  glFinish();
-  impl_->cache.gpu_finished();
+  impl_->finish();
   stats.gpu_resident_bytes = impl_->cache.resident_bytes();
   stats.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();

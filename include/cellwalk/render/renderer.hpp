@@ -83,6 +83,13 @@ struct RenderSettings {
   uint64_t gpu_budget_bytes = 512ull << 20;
 };
 
+// Triangles queued between waits for the GPU. Mesa's llvmpipe bins every triangle queued since
+// the last finish into per-tile command lists and keeps that memory afterwards: measured at about
+// 240 MiB per million long thin triangles, so a frame's driver memory would grow with the world.
+// Waiting every kDriverBatchTriangles bounds it by what one batch needs, which the baseline's
+// warm-up reaches (cellwalk/runtime/run_budget.hpp); a larger mesh is drawn in index ranges.
+inline constexpr uint32_t kDriverBatchTriangles = 1u << 16;
+
 // REQUIRES: a current GlContext (or window context) on the calling thread for its lifetime.
 class Renderer {
  public:

@@ -38,13 +38,14 @@ inline constexpr uint64_t kBytesPerFrame = 512;
 // strategy (each strategy then checks that its part holds what it needs).
 RunBudget split_run_budget(uint64_t total_bytes, uint64_t frames, std::optional<uint64_t> gpu_bytes);
 
-// The process's resident bytes after a renderer with `settings` (its image size and backdrop)
-// has drawn kWarmUpFrames frames of a synthetic scene, kWarmUpTriangles triangles of meshes
-// with and without vertex colours, through a GPU cache too small to hold them: by then the
-// driver has compiled its shaders and grown its working memory (llvmpipe's binned scenes, its
-// freed-buffer pools) to what any frame needs. That is the baseline: it depends on the image,
-// not on the world. REQUIRES: a current GL context.
-inline constexpr uint64_t kWarmUpTriangles = 1 << 20;
+// The process's peak resident bytes while a renderer with `settings` (its image size and
+// backdrop) draws kWarmUpFrames frames of a synthetic scene: small meshes with and without vertex
+// colours through a GPU cache too small to hold them, then kWarmUpBatches full driver batches
+// (kDriverBatchTriangles, render/renderer.hpp) of long thin triangles across the screen. By then
+// the driver has compiled its shaders and grown its working memory (llvmpipe's binned triangles,
+// its freed-buffer pools) to what any one batch needs, and the renderer never queues more. That
+// peak is the baseline: it depends on the image, not on the world. REQUIRES: a current GL context.
+inline constexpr uint32_t kWarmUpBatches = 3;
 inline constexpr int kWarmUpFrames = 3;
 uint64_t measure_baseline(const RenderSettings& settings);
 
