@@ -3,6 +3,8 @@
 // through OBJ and glTF, and the broken-file corpus in tests/data/broken.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -293,7 +295,7 @@ TEST(Export, BunnyRoundTripsThroughObjGltfAndGlb) {
   }
   EXPECT_TRUE(std::filesystem::exists(dir.file("bunny.bin")));
   for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
-    EXPECT_EQ(entry.path().filename().string().find(".tmp"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().filename().string().find(".cwtmp."), std::string::npos) << entry.path();
 }
 
 TEST(Export, SeveralObjectsKeepColoursAndOrder) {
@@ -349,6 +351,137 @@ TEST(ImportErrors, TextErrorsNameTheLine) {
             "test:3: face uses vertex 2 but 1 vertices are defined so far");
 }
 
+// --- bad model data (issue 13, items 6 and 9) -------------------------------------------------
+
+// A GLB of one triangle: positions, normals and indices in one binary chunk, accessors 0, 1
+// and 2; `index_type` is the index accessor's component type, `node` the one node.
+std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index_type,
+                                  const nlohmann::json& node = {{"mesh", 0}}) {
+  const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  std::string bin(reinterpret_cast<const char*>(positions), 36);
+  bin.append(reinterpret_cast<const char*>(normals.data()), 36);
+  // Three indices of the type, padded to 4 bytes; the float ones are 0, 1.7, 2 (1.7 once became
+  // vertex 1).
+  const auto append = [&bin](const auto& values) { bin.append(reinterpret_cast<const char*>(&values), sizeof values); };
+  if (index_type == 5126) append(std::array<float, 3>{0.0f, 1.7f, 2.0f});
+  else if (index_type >= 5124) append(std::array<int32_t, 3>{0, 1, 2});
+  else if (index_type >= 5122) append(std::array<int16_t, 4>{0, 1, 2, 0});
+  else append(std::array<int8_t, 4>{0, 1, 2, 0});
+  const nlohmann::json doc = {
+      {"asset", {{"version", "2.0"}}},
+      {"scene", 0},
+      {"scenes", {{{"nodes", {0}}}}},
+      {"nodes", {node}},
+      {"meshes", {{{"primitives", {{{"attributes", {{"POSITION", 0}, {"NORMAL", 1}}}, {"indices", 2}}}}}}},
+      {"buffers", {{{"byteLength", bin.size()}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}},
+        {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 36}},
+        {{"buffer", 0}, {"byteOffset", 72}, {"byteLength", bin.size() - 72}}}},
+      {"accessors",
+       {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
+        {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
+        {{"bufferView", 2}, {"componentType", index_type}, {"count", 3}, {"type", "SCALAR"}}}}};
+  std::string json = doc.dump();
+  json.append((4 - json.size() % 4) % 4, ' ');
+  std::string glb(12, '\0');
+  const auto chunk = [&glb](const std::string& data, uint32_t type) {
+    const uint32_t length = uint32_t(data.size());
+    glb.append(reinterpret_cast<const char*>(&length), 4).append(reinterpret_cast<const char*>(&type), 4).append(data);
+  };
+  chunk(json, 0x4E4F534Au);
+  chunk(bin, 0x004E4942u);
+  const uint32_t header[3] = {0x46546C67u, 2, uint32_t(glb.size())};
+  std::memcpy(glb.data(), header, 12);
+  return bytes_of(glb);
+}
+
+std::string gltf_error(const std::vector<uint8_t>& glb) {
+  try {
+    parse_model(ModelFormat::kGltf, glb, "test.glb");
+  } catch (const Error& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no Error";
+  return {};
+}
+
+// A PLY triangle with normals; `body` formats one vertex's x y z nx ny nz.
+std::string ply_header(const char* format) {
+  return std::string("ply\nformat ") + format +
+         " 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+         "property float nx\nproperty float ny\nproperty float nz\n"
+         "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+}
+
+std::string binary_ply_with_normal(float bad) {
+  std::string ply = ply_header("binary_little_endian");
+  const float v[18] = {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 1, 0, 0, bad, 1};
+  ply.append(reinterpret_cast<const char*>(v), sizeof v);
+  const int32_t face[3] = {0, 1, 2};
+  ply += '\x03';
+  ply.append(reinterpret_cast<const char*>(face), sizeof face);
+  return ply;
+}
+
+TEST(ImportErrors, NonFiniteNormalsAreRefusedNamingTheVertex) {
+  const std::string ascii_ply = ply_header("ascii") + "0 0 0 0 0 1\n1 0 0 nan 0 1\n0 1 0 0 0 1\n3 0 1 2\n";
+  const std::string noff = "NOFF\n3 1\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 -inf 1\n3 0 1 2\n";
+  EXPECT_EQ(parse_error(ModelFormat::kPly, ascii_ply).rfind("test: vertex 1 has a non-finite normal", 0), 0u);
+  EXPECT_EQ(parse_error(ModelFormat::kOff, noff).rfind("test: vertex 2 has a non-finite normal", 0), 0u);
+  for (const float bad : {std::nanf(""), float(INFINITY)}) {
+    EXPECT_EQ(parse_error(ModelFormat::kPly, binary_ply_with_normal(bad)).rfind("test: vertex 2 has a non-finite normal", 0), 0u);
+    const std::string glb = gltf_error(triangle_glb({0, 0, 1, bad, 0, 1, 0, 0, 1}, 5123));
+    EXPECT_EQ(glb.rfind("test.glb: node 0: vertex 1 has a non-finite normal", 0), 0u) << glb;
+  }
+  // The same files with finite normals read, and keep them.
+  EXPECT_EQ(parse_one(ModelFormat::kPly, binary_ply_with_normal(0.0f)).mesh.normals[2], Vec3(0, 0, 1));
+  const auto good = parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5123), "test.glb");
+  ASSERT_EQ(good.size(), 1u);
+  EXPECT_EQ(good[0].mesh.normals[1], Vec3(0, 0, 1));
+}
+
+// glTF indices are unsigned integers; a float accessor once truncated 1.7 to vertex 1.
+TEST(ImportErrors, GltfIndicesOfAFloatTypeAreRefused) {
+  const std::string message = gltf_error(triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5126));
+  EXPECT_EQ(message.rfind("test.glb: node 0 mesh 0 primitive 0: index accessor 2 has component type 5126", 0), 0u)
+      << message;
+  // Signed types are not indices either; the unsigned ones read.
+  for (int signed_type : {5120, 5122, 5124})
+    EXPECT_NE(gltf_error(triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, signed_type)).find("has component type " + std::to_string(signed_type)),
+              std::string::npos);
+  for (int unsigned_type : {5121, 5123, 5125})
+    EXPECT_EQ(parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, unsigned_type), "test.glb")
+                  .at(0).mesh.indices,
+              (std::vector<uint32_t>{0, 1, 2}));
+}
+
+// A node scaled to zero (how some exporters hide one) has no normal matrix; its normals are
+// recomputed rather than turned into NaN, so the file still imports. A node that scales the
+// triangle past the coordinate bound is refused like a vertex written there.
+TEST(ImportGltf, NodeTransformsKeepNormalsFiniteAndPositionsBounded) {
+  const std::array<float, 9> up = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+  const auto hidden = parse_model(ModelFormat::kGltf, triangle_glb(up, 5123, {{"mesh", 0}, {"scale", {0, 0, 0}}}), "test.glb");
+  ASSERT_EQ(hidden.size(), 1u);
+  for (const Vec3& n : hidden[0].mesh.normals) EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
+  const std::string message = gltf_error(triangle_glb(up, 5123, {{"mesh", 0}, {"scale", {1e8, 1, 1}}}));
+  EXPECT_EQ(message.rfind("test.glb: node 0: vertex 1 (1e+08, 0, 0) has a coordinate beyond 1e7 m", 0), 0u) << message;
+}
+
+TEST(ImportErrors, CoordinatesBeyondTheBoundAreRefusedNamingTheVertex) {
+  const std::string obj = "v 0 0 0\nv 3e38 0 0\nv 0 1 0\nf 1 2 3\n";
+  EXPECT_EQ(parse_error(ModelFormat::kObj, obj),
+            "test: vertex 1 (3e+38, 0, 0) has a coordinate beyond 1e7 m, the largest cellwalk handles; rescale the "
+            "model (e.g. to metres) or move it nearer the origin");
+  EXPECT_NE(parse_error(ModelFormat::kOff, "OFF 3 1 0\n0 0 0\n0 -1.5e7 0\n0 1 0\n3 0 1 2\n").find("vertex 1"),
+            std::string::npos);
+  EXPECT_NE(parse_error(ModelFormat::kPly, ply_header("ascii") + "0 0 0 0 0 1\n1 0 0 0 0 1\n0 0 2e7 0 0 1\n3 0 1 2\n")
+                .find("vertex 2 (0, 0, 2e+07) has a coordinate beyond 1e7 m"),
+            std::string::npos);
+  // At the bound itself a model reads.
+  EXPECT_EQ(parse_one(ModelFormat::kObj, "v 0 0 0\nv 1e7 0 0\nv 0 -1e7 0\nf 1 2 3\n").mesh.positions[2], Vec3(0, -1e7f, 0));
+}
+
 // Every file in the corpus must give an Error (not another exception, not a crash) whose
 // message is one line and names the file.
 TEST(ImportErrors, EveryBrokenFileGivesAnErrorNamingIt) {
@@ -395,6 +528,18 @@ TEST(ImportCommand, BrokenFileExitsNonZeroWithOneLineNamingIt) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
   EXPECT_NE(r.output.find(broken), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir.file("s.cwscene")));
+}
+
+// Issue 13, item 6: such a model once imported, built and gave a path of NaNs.
+TEST(ImportCommand, ObjWithCoordinatesNearFloatsLimitIsRefused) {
+  TempDir dir;
+  const std::string model = dir.file("m.obj");
+  std::ofstream(model) << "v 0 0 0\nv 3e38 0 0\nv -3e38 3e38 0\nf 1 2 3\n";
+  const auto r = test::run_cellwalk("import " + model + " -o " + dir.file("s.cwscene"));
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_EQ(r.output, "cellwalk: " + model + ": vertex 1 (3e+38, 0, 0) has a coordinate beyond 1e7 m, the largest "
+                      "cellwalk handles; rescale the model (e.g. to metres) or move it nearer the origin\n");
   EXPECT_FALSE(std::filesystem::exists(dir.file("s.cwscene")));
 }
 

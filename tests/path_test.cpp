@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 
 #include "cellwalk/core/error.hpp"
@@ -121,6 +122,50 @@ TEST(Path, MalformedFilesGiveErrorsNamingTheLine) {
     }
   }
   EXPECT_THROW(read_path(dir.file("missing.txt")), Error);
+}
+
+// Issue 13, item 6: a model with coordinates near float's limit once gave a path of NaNs. The
+// generator refuses a navigation graph beyond the coordinate bound, and the writer never writes
+// a non-finite number, leaving an existing path file as it was.
+TEST(Path, NeverWritesANonFiniteNumber) {
+  NavGraph far = grid_streets();
+  far.nodes[4] = Vec3(3e38f, 1.7f, -3e38f);
+  try {
+    generate_path(far, PathParams{});
+    ADD_FAILURE() << "a graph beyond the bound gave a path";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("navigation node 4 (3e+38, 1.7, -3e+38) has a coordinate beyond 1e7 m"),
+              std::string::npos) << e.what();
+  }
+  far.nodes[4] = Vec3(0.0f, std::nanf(""), 0.0f);
+  EXPECT_THROW(generate_path(far, PathParams{}), Error);
+  far.nodes[4] = Vec3(kMaxCoordinate, 1.7f, -kMaxCoordinate);  // the bound itself is fine
+  EXPECT_NO_THROW(generate_path(far, PathParams{}));
+
+  test::TempDir dir;
+  const std::string file = dir.file("p.path");
+  const CameraPath good = generate_path(grid_streets(), PathParams{});
+  write_path(good, file);
+  const std::vector<uint8_t> before = test::slurp(file);
+  for (int field = 0; field < 6; ++field)
+    for (const double bad : {double(std::nanf("")), double(INFINITY), -double(INFINITY)}) {
+      CameraPath path = good;
+      PathFrame& f = path.frames[7];
+      const auto value = static_cast<float>(bad);
+      if (field == 0) f.time = bad;
+      if (field == 1) f.position.x = value;
+      if (field == 2) f.position.y = value;
+      if (field == 3) f.position.z = value;
+      if (field == 4) f.yaw_deg = value;
+      if (field == 5) f.pitch_deg = value;
+      try {
+        write_path(path, file);
+        ADD_FAILURE() << "wrote " << bad << " in field " << field;
+      } catch (const Error& e) {
+        EXPECT_EQ(std::string(e.what()).rfind(file + ": frame 7 has a non-finite", 0), 0u) << e.what();
+      }
+      EXPECT_EQ(test::slurp(file), before);
+    }
 }
 
 TEST(Path, UnknownKindAndEmptyGraphAreErrors) {

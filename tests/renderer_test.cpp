@@ -17,6 +17,7 @@
 #include <random>
 #include <set>
 
+#include "cellwalk/core/atomic_file.hpp"
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/process_memory.hpp"
 #include "render/gpu_mesh_cache.hpp"
@@ -491,7 +492,7 @@ TEST(WritePng, FailureNamesTheFileAndKeepsTheOldOne) {
   write_png(two_row_image(), file);
   std::string before = read_bytes(file);
   // A directory where the temporary would go makes the write fail even for root.
-  std::filesystem::create_directory(file + ".tmp." + std::to_string(::getpid()));
+  std::filesystem::create_directory(temporary_path(file, ::getpid()));
   Image other = two_row_image();
   other.rgba[0] = 7;
   try {

@@ -4,8 +4,10 @@
 // the PVS builder's storage, shards, merge and resume.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/random.hpp"
@@ -235,6 +237,75 @@ TEST(PvsBuilder, StoresShardsMergesAndResumes) {
   const World m(dir.file("merged.cww"));
   const visibility::StoredPvs pvs(m);
   for (const auto& [cell, set] : sets) EXPECT_EQ(pvs.set(cell)->objects, set.objects) << cell;
+}
+
+// A disk that fills while `pvs` creates its checkpoint leaves it empty, and damage can hit its
+// header; either once blocked every later run. Such a checkpoint is now discarded with a
+// one-line warning and the run gives exactly a clean run's sets; an intact checkpoint of another
+// run is still refused (StoresShardsMergesAndResumes).
+TEST(PvsBuilder, CheckpointWithADamagedHeaderIsDiscardedAndTheRunStartsOver) {
+  test::TempDir dir;
+  const World world(test::write_street_world(dir, 16));
+  const visibility::EmbreeScene scene(world);
+  const auto partition = visibility::make_partition("grid:8", world, scene);
+  EngineOptions options;
+  options.rays_per_point = 256;
+  options.sample_points = 2;
+  const auto engine = make_engine("sampling", world, options);
+  const visibility::PvsRun run{"sampling", false, "grid:8 test"};
+  const std::string clean = dir.file("clean");
+  const visibility::CellSets expected = visibility::compute_cell_sets(world, *engine, *partition, run, clean);
+  ASSERT_FALSE(expected.empty());
+  const std::vector<uint8_t> complete = test::slurp(clean);
+  const auto same_sets = [&](const visibility::CellSets& sets) {
+    if (sets.size() != expected.size()) return false;
+    for (const auto& [cell, set] : expected)
+      if (!sets.count(cell) || sets.at(cell).objects != set.objects) return false;
+    return true;
+  };
+  // Damage: empty, a torn magic, a torn header, and one flipped byte in the magic, the run
+  // hash, the settings and the header's own checksum (docs/format.md, "Checkpoints").
+  const std::string ck = dir.file("ck");
+  std::vector<std::vector<uint8_t>> damaged = {{}, {'C', 'W', 'P'}, {complete.begin(), complete.begin() + 30}};
+  const size_t header_bytes = 8 + 8 + 4 + 4 + 4 + run.engine.size() + 1 + 4 + run.settings.size() + 4 +
+                              serialize_partition(*partition).size() + 8;
+  for (size_t at : {size_t(0), size_t(9), size_t(8 + 8 + 4 + 4 + 4 + run.engine.size() + 1 + 4), header_bytes - 1}) {
+    std::vector<uint8_t> bytes = complete;
+    bytes[at] ^= 0x10;
+    damaged.push_back(bytes);
+  }
+  for (const std::vector<uint8_t>& bytes : damaged) {
+    test::spit(ck, bytes);
+    testing::internal::CaptureStderr();
+    const visibility::CellSets sets = visibility::compute_cell_sets(world, *engine, *partition, run, ck);
+    const std::string warning = testing::internal::GetCapturedStderr();
+    EXPECT_TRUE(same_sets(sets)) << bytes.size() << " bytes";
+    EXPECT_EQ(warning.rfind("cellwalk: warning: " + ck + "@", 0), 0u) << warning;
+    EXPECT_NE(warning.find("discarded"), std::string::npos) << warning;
+    EXPECT_EQ(std::count(warning.begin(), warning.end(), '\n'), 1) << warning;
+    // The checkpoint written anew resumes like any other: no warning, every cell reused.
+    std::optional<std::pair<uint64_t, uint64_t>> first;  // (cells done, total) at the start
+    testing::internal::CaptureStderr();
+    const auto again = visibility::compute_cell_sets(world, *engine, *partition, run, ck, [&](uint64_t done, uint64_t all) {
+      if (!first) first = std::pair(done, all);
+    });
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+    EXPECT_TRUE(same_sets(again));
+    ASSERT_TRUE(first.has_value());
+    EXPECT_EQ(first->first, first->second);
+  }
+}
+
+// The command as the issue ran it: an empty checkpoint left by a full disk no longer blocks pvs.
+TEST(PvsCommand, EmptyCheckpointLeftByAFullDiskIsDiscardedWithAWarning) {
+  test::TempDir dir;
+  const std::string file = test::write_street_world(dir, 8);
+  test::spit(file + ".pvs-checkpoint", {});
+  const auto r = test::run_cellwalk("pvs " + file + " --engine sampling --cells grid:10 --points 2 --rays 64");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("cellwalk: warning: " + file + ".pvs-checkpoint@0: truncated"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(file + ".pvs-checkpoint"));
+  EXPECT_TRUE(visibility::StoredPvs(World(file)).partition().cell_count() > 0);
 }
 
 // Each cell's record is the smallest of gap-coded ids, a bitmask and a Δ from a neighbour, so

@@ -139,11 +139,9 @@ void warn_if_other_world(const CameraPath& path, const std::string& path_file, c
   if (!path.world.known()) return;
   const PathWorld here = path_world(info);
   if (here.identity == path.world.identity) return;
-  std::fprintf(stderr,
-               "cellwalk: warning: %s: made for the world '%s' (%s), not %s ('%s', %s); "
-               "its frames may stand inside buildings: make a path for this world with cellwalk path\n",
-               path_file.c_str(), path.world.name.c_str(), path.world.identity.c_str(), world_file.c_str(),
-               here.name.c_str(), here.identity.c_str());
+  warn(path_file, "made for the world '" + path.world.name + "' (" + path.world.identity + "), not " + world_file +
+                      " ('" + here.name + "', " + here.identity +
+                      "); its frames may stand inside buildings: make a path for this world with cellwalk path");
 }
 
 }  // namespace cellwalk::app

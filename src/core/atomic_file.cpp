@@ -1,12 +1,16 @@
 #include "cellwalk/core/atomic_file.hpp"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cstring>
 #include <filesystem>
+#include <mutex>
+#include <set>
 
 #include "cellwalk/core/error.hpp"
 
@@ -14,11 +18,46 @@ namespace cellwalk {
 namespace {
 
 constexpr size_t kBufferBytes = 1 << 20;
+constexpr std::string_view kTemporaryTag = ".cwtmp.";
+
+std::filesystem::path directory_of(const std::string& path) {
+  std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  return dir.empty() ? "." : dir;
+}
+
+// The pid in a temporary's name ".<name>.cwtmp.<pid>", or 0 when `file` is no such name. Never
+// negative: kill() with a pid <= 0 signals whole process groups.
+pid_t temporary_pid(std::string_view file) {
+  const size_t tag = file.rfind(kTemporaryTag);
+  if (file.size() < 2 || file[0] != '.' || tag == std::string_view::npos || tag < 2) return 0;
+  const std::string_view digits = file.substr(tag + kTemporaryTag.size());
+  pid_t pid = 0;
+  const auto [end, error] = std::from_chars(digits.data(), digits.data() + digits.size(), pid);
+  return error == std::errc() && end == digits.data() + digits.size() && pid > 0 ? pid : 0;
+}
+
+bool process_has_exited(pid_t pid) { return ::kill(pid, 0) != 0 && errno == ESRCH; }
+
+// Removes the temporaries in `dir` that killed processes left behind. Once per directory and
+// process: a directory of many outputs (a walk's frames) is not listed again for each.
+void remove_stale_temporaries(const std::filesystem::path& dir) {
+  static std::mutex mutex;
+  static std::set<std::filesystem::path> cleaned;
+  std::error_code ec;
+  const std::filesystem::path key = std::filesystem::absolute(dir, ec).lexically_normal();
+  {
+    std::lock_guard lock(mutex);
+    if (ec || !cleaned.insert(key).second) return;
+  }
+  for (std::filesystem::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const pid_t pid = temporary_pid(it->path().filename().native());
+    std::error_code type_ec;
+    if (pid > 0 && it->is_regular_file(type_ec) && process_has_exited(pid)) ::unlink(it->path().c_str());
+  }
+}
 
 void sync_directory_of(const std::string& path) {
-  std::filesystem::path dir = std::filesystem::path(path).parent_path();
-  if (dir.empty()) dir = ".";
-  int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  int fd = ::open(directory_of(path).c_str(), O_RDONLY | O_DIRECTORY);
   if (fd >= 0) {
     ::fsync(fd);  // best effort: some file systems refuse fsync on directories
     ::close(fd);
@@ -29,7 +68,8 @@ void sync_directory_of(const std::string& path) {
 
 AtomicFile::AtomicFile(std::string path) : path_(std::move(path)) {
   if (std::filesystem::is_directory(path_)) fail(path_, "is a directory, expected a file name");
-  temp_ = path_ + ".tmp." + std::to_string(::getpid());
+  remove_stale_temporaries(directory_of(path_));
+  temp_ = temporary_path(path_, ::getpid());
   // Read and write: append_contents_of() reads a scratch file back.
   fd_ = ::open(temp_.c_str(), O_RDWR | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd_ < 0) fail(path_, std::string("cannot create: ") + std::strerror(errno));
@@ -112,6 +152,12 @@ void AtomicFile::commit() {
     fail(path_, std::string("rename failed: ") + std::strerror(err));
   }
   sync_directory_of(path_);
+}
+
+std::string temporary_path(const std::string& path, pid_t pid) {
+  const std::filesystem::path p(path);
+  const std::string name = "." + p.filename().string() + std::string(kTemporaryTag) + std::to_string(pid);
+  return (p.parent_path() / name).string();
 }
 
 void write_file_atomically(const std::string& path, std::string_view content) {

@@ -24,6 +24,12 @@ PathWorld parse_world_line(const std::string& line, const std::string& where) {
     fail(where, "expected \"# world <name> <identity>\"; fix or delete the line");
   return {rest.substr(0, space), rest.substr(space + 1)};
 }
+
+bool is_finite(const PathFrame& f) {
+  return std::isfinite(f.time) && std::isfinite(f.position.x) && std::isfinite(f.position.y) &&
+         std::isfinite(f.position.z) && std::isfinite(f.yaw_deg) && std::isfinite(f.pitch_deg);
+}
+
 // Exactly version 1: a later version may mean something else by the same numbers.
 void check_header(const std::string& line, const std::string& where) {
   const std::string family = "# cellwalk path ";
@@ -55,9 +61,7 @@ CameraPath read_path(const std::string& file) {
       fail(where, "expected 6 numbers: time x y z yaw pitch");
     std::string extra;
     if (fields >> extra) fail(where, "unexpected text after the 6 numbers: \"" + extra + "\"");
-    if (!std::isfinite(f.time) || !std::isfinite(f.position.x) || !std::isfinite(f.position.y) ||
-        !std::isfinite(f.position.z) || !std::isfinite(f.yaw_deg) || !std::isfinite(f.pitch_deg))
-      fail(where, "non-finite number");
+    if (!is_finite(f)) fail(where, "non-finite number");
     if (!path.frames.empty() && f.time < path.frames.back().time)
       fail(where, "time goes backwards");
     path.frames.push_back(f);
@@ -68,6 +72,12 @@ CameraPath read_path(const std::string& file) {
 }
 
 void write_path(const CameraPath& path, const std::string& file) {
+  // A NaN or inf written here would only be refused by the next reader: refuse it now.
+  for (size_t i = 0; i < path.frames.size(); ++i) {
+    if (!is_finite(path.frames[i]))
+      fail(file, "frame " + std::to_string(i) + " has a non-finite time, position or angle; nothing was written "
+                 "(the world's coordinates are probably beyond what cellwalk handles: rebuild it from a rescaled model)");
+  }
   std::ostringstream out;
   out << kHeader << "\n";
   if (path.world.known()) out << kWorldTag << path.world.name << ' ' << path.world.identity << "\n";

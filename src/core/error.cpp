@@ -1,5 +1,7 @@
 #include "cellwalk/core/error.hpp"
 
+#include <cstdio>
+
 namespace cellwalk {
 
 void fail(std::string_view where, std::string_view what) {
@@ -7,6 +9,11 @@ void fail(std::string_view where, std::string_view what) {
   message.reserve(where.size() + what.size() + 2);
   message.append(where).append(": ").append(what);
   throw Error(message);
+}
+
+void warn(std::string_view where, std::string_view what) {
+  std::fprintf(stderr, "cellwalk: warning: %.*s: %.*s\n", int(where.size()), where.data(), int(what.size()),
+               what.data());
 }
 
 }  // namespace cellwalk

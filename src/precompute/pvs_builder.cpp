@@ -128,11 +128,14 @@ struct ParsedPart {
   uint64_t valid_bytes = 0;
 };
 
-ParsedPart parse_part(const std::string& path, uint64_t object_count) {
+std::vector<uint8_t> read_part_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
-  const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  ByteReader r(bytes, path);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// The header; throws Error when it is truncated or damaged. Leaves `r` at the first record.
+ParsedPart parse_header(ByteReader& r, std::span<const uint8_t> bytes) {
   ParsedPart p;
   if (r.get_array<char>(8, "magic") != std::vector<char>(kPartMagic, kPartMagic + 8))
     r.error("not a cellwalk pvs part or checkpoint (bad magic)");
@@ -146,7 +149,11 @@ ParsedPart parse_part(const std::string& path, uint64_t object_count) {
   const uint64_t header_end = r.offset();
   if (r.get<uint64_t>("header checksum") != XXH3_64bits(bytes.data(), header_end)) r.error("header checksum mismatch");
   p.valid_bytes = r.offset();
-  // Records until the first torn or damaged one: everything after it is recomputed.
+  return p;
+}
+
+// Records until the first torn or damaged one: everything after it is recomputed.
+void parse_records(ByteReader& r, const std::string& path, uint64_t object_count, ParsedPart& p) {
   while (r.remaining() >= 12) {
     const uint32_t len = r.get<uint32_t>("record length");
     const uint64_t sum = r.get<uint64_t>("record checksum");
@@ -165,6 +172,35 @@ ParsedPart parse_part(const std::string& path, uint64_t object_count) {
     p.sets[cell] = std::move(set);
     p.valid_bytes = r.offset();
   }
+}
+
+ParsedPart parse_part(const std::string& path, uint64_t object_count) {
+  const std::vector<uint8_t> bytes = read_part_file(path);
+  ByteReader r(bytes, path);
+  ParsedPart p = parse_header(r, bytes);
+  parse_records(r, path, object_count, p);
+  return p;
+}
+
+// What a checkpoint lets a run reuse: nothing when there is none, or when its header is
+// truncated or damaged (a disk that filled while it was created, a damaged file): its records
+// cannot be trusted to belong to this run, so it is discarded with a warning and the run starts
+// over rather than failing every later run. An intact header of another run is an Error: that
+// checkpoint may be worth keeping, and only the user knows.
+ParsedPart resumable_part(const std::string& checkpoint, uint64_t hash, uint64_t object_count) {
+  if (!std::filesystem::exists(checkpoint)) return {};
+  const std::vector<uint8_t> bytes = read_part_file(checkpoint);
+  ByteReader r(bytes, checkpoint);
+  ParsedPart p;
+  try {
+    p = parse_header(r, bytes);
+  } catch (const Error& e) {
+    warn(e.what(), "the checkpoint's header is unreadable, so it is discarded and every cell is computed again");
+    return {};
+  }
+  if (p.hash != hash)
+    fail(checkpoint, "belongs to a different run (world, cells, engine, settings or shard); delete it to start over");
+  parse_records(r, checkpoint, object_count, p);
   return p;
 }
 
@@ -187,7 +223,11 @@ class CheckpointWriter {
     while (done < bytes.size()) {
       const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
       if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) fail(path_, std::string("write failed: ") + std::strerror(errno));
+      if (n <= 0) {
+        const int err = n < 0 ? errno : ENOSPC;
+        fail(path_, std::string("write failed: ") + std::strerror(err) +
+                        (err == ENOSPC ? " (free some space and run again: the run resumes from this checkpoint)" : ""));
+      }
       done += size_t(n);
     }
   }
@@ -256,15 +296,9 @@ CellSets compute_cell_sets(const World& world, const VisibilityEngine& engine,
                            const std::function<void(uint64_t, uint64_t)>& progress) {
   const std::vector<uint8_t> cells = serialize_partition(partition);
   const uint64_t hash = run_hash(world, run, cells);
-  CellSets sets;
-  uint64_t keep = 0;
-  if (std::filesystem::exists(checkpoint)) {
-    ParsedPart old = parse_part(checkpoint, world.object_count());
-    if (old.hash != hash)
-      fail(checkpoint, "belongs to a different run (world, cells, engine, settings or shard); delete it to start over");
-    sets = std::move(old.sets);
-    keep = old.valid_bytes;
-  }
+  ParsedPart old = resumable_part(checkpoint, hash, world.object_count());
+  CellSets sets = std::move(old.sets);
+  const uint64_t keep = old.valid_bytes;
   const std::vector<CellId> all = shard_cells(partition, run.shard, run.shards);
   std::vector<CellId> todo;
   for (CellId c : all)

@@ -283,6 +283,14 @@ Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
   if (p.indices >= 0) {
     const AccessorView iv = view_of(m, p.indices, where);
     if (iv.components != 1 || iv.normalized) fail(where, "indices are not plain scalars");
+    // glTF 2.0 section 3.7.2.1: indices are unsigned integers. A float index (1.7) has no
+    // vertex to name; truncating it would silently draw another triangle.
+    if (iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE &&
+        iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+        iv.component_type != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT)
+      fail(where, "index accessor " + std::to_string(p.indices) + " has component type " +
+                      std::to_string(iv.component_type) +
+                      "; glTF indices must be unsigned bytes, shorts or ints (5121, 5123, 5125): re-export the model");
     order.resize(iv.count);
     for (size_t i = 0; i < iv.count; ++i) {
       const double index = iv.get(i, 0);

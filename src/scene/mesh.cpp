@@ -19,10 +19,13 @@ void validate(const Mesh& mesh, std::string_view where) {
     fail(where, "normal count differs from position count");
   if (!mesh.colors.empty() && mesh.colors.size() != mesh.positions.size())
     fail(where, "colour count differs from position count");
-  for (size_t i = 0; i < mesh.positions.size(); ++i) {
-    const Vec3& p = mesh.positions[i];
-    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-      fail(where, "vertex " + std::to_string(i) + " has a non-finite coordinate");
+  for (size_t i = 0; i < mesh.positions.size(); ++i) check_position(mesh.positions[i], where, "vertex " + std::to_string(i));
+  for (size_t i = 0; i < mesh.normals.size(); ++i) {
+    const Vec3& n = mesh.normals[i];
+    if (!std::isfinite(n.x) || !std::isfinite(n.y) || !std::isfinite(n.z))
+      fail(where, "vertex " + std::to_string(i) + " has a non-finite normal (" + std::to_string(n.x) + ", " +
+                      std::to_string(n.y) + ", " + std::to_string(n.z) +
+                      "); fix the normals, or remove them all so cellwalk computes them");
   }
   const size_t n = mesh.positions.size();
   for (size_t i = 0; i < mesh.indices.size(); ++i)
@@ -56,7 +59,13 @@ Aabb bounds_of(const Mesh& mesh) {
 
 void transform(Mesh& mesh, const Mat4& m) {
   for (Vec3& p : mesh.positions) p = Vec3(m * Vec4(p, 1.0f));
+  if (mesh.normals.empty()) return;
   const glm::mat3 normal_matrix = glm::transpose(glm::inverse(glm::mat3(m)));
+  // A singular m (a zero scale, which exporters use to hide a node) has no inverse: normals
+  // carried through it would be NaN, so they follow from the flattened positions instead.
+  for (int c = 0; c < 3; ++c)
+    if (!std::isfinite(normal_matrix[c].x) || !std::isfinite(normal_matrix[c].y) || !std::isfinite(normal_matrix[c].z))
+      return compute_normals(mesh);
   for (Vec3& n : mesh.normals) {
     n = normal_matrix * n;
     float len = glm::length(n);

@@ -126,6 +126,9 @@ CameraPath generate_path(const NavGraph& nav, const PathParams& params) {
   for (auto [a, b] : nav.edges) has_edge |= a != b && glm::length(nav.nodes.at(a) - nav.nodes.at(b)) > 1e-3f;
   if (!has_edge) fail("path", "the scene's navigation graph has no edges to walk on");
   if (params.frames < 1 || !(params.fps > 0)) fail("path", "need at least one frame and a positive fps");
+  // Nodes beyond the coordinate bound make lengths and headings overflow to inf and NaN.
+  for (size_t i = 0; i < nav.nodes.size(); ++i)
+    check_position(nav.nodes[i], "path", "the world's navigation node " + std::to_string(i));
 
   Random rng(params.seed);
   Route route(nav, rng);

@@ -29,6 +29,8 @@ bool is_world_file(const std::string& path) {
   return std::memcmp(magic, world_layout::kMagic, 8) == 0;
 }
 
+using world_layout::check_zero_padding;
+
 WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
   if (std::filesystem::is_directory(path)) fail(path, "is a directory, expected a world file");
   // The header names the page size; read it with the smallest page size first.
@@ -49,6 +51,8 @@ WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
   auto table = read_pages(*pages_, h.checksum_first_page, checksum_pages);
   if (XXH3_64bits(table.data(), h.checksum_bytes) != h.checksum_hash)
     fail(path + "@" + std::to_string(h.checksum_first_page * page_size_), "page checksum table: checksum mismatch (the file is damaged)");
+  check_zero_padding(std::span<const uint8_t>(table).subspan(h.checksum_bytes),
+                     h.checksum_first_page * page_size_ + h.checksum_bytes, path, "page checksum table");
   page_checksums_.resize(h.checksummed_pages);
   if (h.checksum_bytes) std::memcpy(page_checksums_.data(), table.data(), h.checksum_bytes);
 
@@ -56,6 +60,8 @@ WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
   auto section_pages = read_pages(*pages_, h.section_first_page, (h.section_bytes + page_size_ - 1) / page_size_);
   if (XXH3_64bits(section_pages.data(), h.section_bytes) != h.section_hash)
     fail(path + "@" + std::to_string(section_offset), "section table: checksum mismatch (the file is damaged)");
+  check_zero_padding(std::span<const uint8_t>(section_pages).subspan(h.section_bytes), section_offset + h.section_bytes,
+                     path, "section table");
   ByteReader r(std::span<const uint8_t>(section_pages).first(h.section_bytes), path, section_offset);
   for (uint32_t i = 0; i < h.section_count; ++i) {
     auto name = r.get<std::array<char, world_layout::kMaxSectionName + 1>>("section name");

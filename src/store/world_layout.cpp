@@ -2,6 +2,7 @@
 
 #include <xxhash.h>
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 
@@ -48,12 +49,14 @@ Header decode_header(std::span<const uint8_t> bytes, const std::string& path, ui
   h.checksum_hash = r.get<uint64_t>("checksum table hash");
   h.section_first_page = r.get<uint64_t>("section table page");
   h.section_count = r.get<uint32_t>("section count");
-  r.get<uint32_t>("padding");
+  const uint32_t reserved = r.get<uint32_t>("padding");
   h.section_bytes = r.get<uint64_t>("section table bytes");
   h.section_hash = r.get<uint64_t>("section table hash");
   const uint64_t own = r.get<uint64_t>("header hash");
   if (XXH3_64bits(bytes.data(), kHeaderBytes - 8) != own)
     fail(path + "@0", "header: checksum mismatch (the file is damaged)");
+  if (reserved != 0) fail(path + "@68", "header: reserved word is not zero (the file is damaged)");
+  check_zero_padding(bytes.subspan(kHeaderBytes), kHeaderBytes, path, "header page");
   if (h.page_size < 512 || (h.page_size & (h.page_size - 1)) != 0)
     fail(path + "@12", "header: page size " + std::to_string(h.page_size) + " is invalid");
   // Page counts are checked against the file before any product, so none can wrap.
@@ -67,7 +70,21 @@ Header decode_header(std::span<const uint8_t> bytes, const std::string& path, ui
       h.section_first_page >= h.page_count || h.section_bytes != h.section_count * kSectionEntryBytes ||
       h.section_first_page * h.page_size + h.section_bytes > file_size)
     fail(path + "@0", "header: table positions are inconsistent (the file is damaged)");
+  // The tables follow each other and end the file, as the writer lays them out: no page lies
+  // outside the checksummed pages and the tables.
+  const auto pages_of = [&h](uint64_t bytes) { return (bytes + h.page_size - 1) / h.page_size; };
+  if (h.section_first_page != h.checksum_first_page + pages_of(h.checksum_bytes) ||
+      h.page_count != h.section_first_page + pages_of(h.section_bytes))
+    fail(path + "@0", "header: the tables do not end the file (the file is damaged)");
   return h;
+}
+
+void check_zero_padding(std::span<const uint8_t> padding, uint64_t offset, const std::string& path,
+                        const std::string& part) {
+  const auto* nonzero = std::find_if(padding.data(), padding.data() + padding.size(), [](uint8_t b) { return b != 0; });
+  if (nonzero != padding.data() + padding.size())
+    fail(path + "@" + std::to_string(offset + uint64_t(nonzero - padding.data())),
+         part + ": padding byte is not zero (the file is damaged; rebuild it or restore a copy)");
 }
 
 }  // namespace cellwalk::world_layout

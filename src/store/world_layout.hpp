@@ -31,7 +31,15 @@ constexpr size_t kHeaderBytes = 8 + 4 + 4 + 8 * 6 + 4 + 4 + 8 + 8 + 8;  // field
 
 std::vector<uint8_t> encode_header(const Header& header);
 // Throws Error naming `path` when the header is damaged, of another version or inconsistent
-// with `file_size`.
+// with `file_size`, when the tables do not fill the file's last pages exactly as the writer
+// lays them out, or when a byte of the header page after the fields (`bytes`: the page, or a
+// first part of it) is not zero.
 Header decode_header(std::span<const uint8_t> bytes, const std::string& path, uint64_t file_size);
+
+// Padding no checksum covers must be zero, so that every byte of a world file is checked:
+// throws Error "<path>@<offset>: <part>: padding byte is not zero ..." at the first byte of
+// `padding` that is not, `offset` being the file offset of padding[0].
+void check_zero_padding(std::span<const uint8_t> padding, uint64_t offset, const std::string& path,
+                        const std::string& part);
 
 }  // namespace cellwalk::world_layout

@@ -1,7 +1,15 @@
-// Writing files so that nothing is lost: bytes go to "<path>.tmp.<pid>", commit() fsyncs and
-// renames over `path`. Until commit() succeeds an existing file at `path` is untouched; a
+// Writing files so that nothing is lost: bytes go to a temporary beside `path`, commit() fsyncs
+// and renames it over `path`. Until commit() succeeds an existing file at `path` is untouched; a
 // failure (e.g. a full disk) throws Error naming the file and removes the temporary.
+//
+// A killed process cannot remove its temporary, so each one is named after its process,
+// ".<name>.cwtmp.<pid>": hidden, never ending in a file type cellwalk reads (a complete
+// temporary of a world must not look like one), and recognisably stale once <pid> has exited.
+// The first AtomicFile a process opens in a directory removes the temporaries there whose
+// process no longer exists; a live process's temporary is never touched.
 #pragma once
+
+#include <sys/types.h>
 
 #include <cstdint>
 #include <span>
@@ -43,5 +51,8 @@ class AtomicFile {
 };
 
 void write_file_atomically(const std::string& path, std::string_view content);
+
+// The temporary an AtomicFile for `path` writes in process `pid`: "<dir>/.<name>.cwtmp.<pid>".
+std::string temporary_path(const std::string& path, pid_t pid);
 
 }  // namespace cellwalk

@@ -17,4 +17,8 @@ class Error : public std::runtime_error {
 // Throws Error("<where>: <what>"). `where` names the file, section, line or offset.
 [[noreturn]] void fail(std::string_view where, std::string_view what);
 
+// Prints "cellwalk: warning: <where>: <what>" as one line on stderr, for damage cellwalk
+// recovers from by itself (e.g. a checkpoint it discards); the run goes on.
+void warn(std::string_view where, std::string_view what);
+
 }  // namespace cellwalk

@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <limits>
+#include <string>
+#include <string_view>
 
 #include <glm/glm.hpp>
 
@@ -45,6 +47,16 @@ struct Aabb {
            min.z <= b.max.z && b.min.z <= max.z;
   }
 };
+
+// The largest |coordinate| of a position cellwalk accepts, in metres (issue 13, item 6): far
+// beyond any city or ship, and small enough that every sum, difference and square of positions
+// the pipeline forms (bounds, cell grids, path lengths, distances) stays finite in float.
+constexpr float kMaxCoordinate = 1e7f;
+
+// Throws Error "<where>: <what> (x, y, z) is not finite" or "... has a coordinate beyond 1e7 m",
+// with what to do, unless every coordinate of `p` is finite and within ±kMaxCoordinate. Every
+// reader of positions (model files, scene and world files, path generation) checks each with it.
+void check_position(const Vec3& p, std::string_view where, const std::string& what);
 
 // The box that holds `box` after the affine transform `m`.
 Aabb transformed(const Aabb& box, const Mat4& m);

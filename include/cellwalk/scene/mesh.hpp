@@ -41,7 +41,8 @@ struct Object {
 };
 
 // Checks what every consumer relies on: a whole number of triangles, indices in range,
-// finite coordinates, normals/colors empty or one per position. Throws Error naming `where`.
+// positions finite and within ±kMaxCoordinate (check_position), finite normals, normals/colors
+// empty or one per position. Throws Error naming `where` and the vertex.
 void validate(const Mesh& mesh, std::string_view where);
 
 // Area-weighted vertex normals; replaces any normals present.
@@ -49,7 +50,8 @@ void compute_normals(Mesh& mesh);
 
 Aabb bounds_of(const Mesh& mesh);
 
-// Applies an affine transform to positions and (inverse-transpose) to normals.
+// Applies an affine transform to positions and (inverse-transpose) to normals; a singular
+// transform's normals are recomputed from the transformed positions.
 void transform(Mesh& mesh, const Mat4& m);
 
 // Appends `src` to `dst`, offsetting indices. Normals/colours are kept only if both have them
