@@ -10,7 +10,9 @@
 #include "cellwalk/scene/generators.hpp"
 #include "cellwalk/scene/scene_file.hpp"
 #include "precompute/cell_points.hpp"
+#include "cellwalk/core/error.hpp"
 #include "precompute/dov_engine.hpp"
+#include "precompute/pvs_builder.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -236,6 +238,27 @@ TEST(DovEngineCornerCache, SharedCornersGiveTheSameDovs) {
     compared += a.objects.size();
   }
   EXPECT_GT(compared, 0u);
+}
+
+// A checkpoint of one cube-map mode is not resumed by another: the mode is in the run identity.
+TEST(DovEngineRunIdentity, ACheckpointOfOneModeIsRefusedByAnother) {
+  test::TempDir dir;
+  const World world(test::write_street_world(dir, 6));
+  const auto partition = make_grid_partition(default_cell_region(world.info().bounds, world.info().nav, true), 8.0f);
+  EngineOptions rays;
+  rays.dov_resolution = 16;
+  rays.sample_points = 1;
+  rays.rays_per_point = 64;
+  EngineOptions exact = rays;
+  exact.dov_cubes = DovCubes::kExact;
+  const auto engine = make_engine("dov", world, rays);
+  const visibility::PvsRun rays_run = visibility::make_pvs_run(*engine, "grid:8", rays);
+  const visibility::PvsRun exact_run = visibility::make_pvs_run(*engine, "grid:8", exact);
+  EXPECT_NE(rays_run.settings.find("cubes=rays"), std::string::npos) << rays_run.settings;
+  EXPECT_NE(exact_run.settings.find("cubes=exact"), std::string::npos) << exact_run.settings;
+  visibility::compute_cell_sets(world, *engine, *partition, rays_run, dir.file("ck"));
+  EXPECT_THROW(visibility::compute_cell_sets(world, *engine, *partition, exact_run, dir.file("ck")), Error);
+  EXPECT_NO_THROW(visibility::compute_cell_sets(world, *engine, *partition, rays_run, dir.file("ck")));
 }
 
 INSTANTIATE_TEST_SUITE_P(DovEngine, DovCubesAgainstExact, ::testing::Values(DovCubes::kRays),
