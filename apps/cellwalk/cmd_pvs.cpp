@@ -172,7 +172,6 @@ void run_compute(const Args& a, const World& world) {
   const double setup_s = seconds_since(setup);
   const visibility::PvsRun run = visibility::make_pvs_run(*engine, a.cells, a.options, a.shard, a.threads);
   if (a.check > 0) return run_check(a, world, *engine, *partition);
-
   const bool sharded = run.shards > 1;
   const std::string out = !a.out.empty() ? a.out
                           : sharded      ? a.world + ".part-" + std::to_string(run.shard) + "-of-" + std::to_string(run.shards)

@@ -1,7 +1,6 @@
 // ID cube maps: the six 90° views around a point as object-id buffers, the "cubic projection"
 // of HDoV thesis §5.5.2 (digest 000 §3.9). One layout for every source: the GL renderer (the DoV
-// engine's exact mode and the ground truth), Embree rays (ray_cube_map.hpp) and GL at coarser
-// levels (the DoV engine's levels mode).
+// engine's exact mode and the ground truth) and Embree rays (ray_cube_map.hpp, the rays mode).
 #pragma once
 
 #include <array>
