@@ -14,6 +14,7 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
   auto* cmd = bench.add_subcommand("visual", "VISUAL (HDoV thesis ch. 5): Table 5.2, Exps. 1-3, Fig. 5.23 -> <out>/visual.md");
   struct Args {
     VisualBenchParams params;
+    std::string dov_cubes = dov_cubes_name(DovCubes::kRays);
     bool json = false;
   };
   auto args = std::make_shared<Args>();
@@ -21,6 +22,7 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--objects", p.objects, "Objects of the city")->capture_default_str()->check(number_in(50, 1000000));
   cmd->add_option("--cells", p.cells_per_side, "View cells per side of the grid")->capture_default_str()->check(number_in(2, 256));
   cmd->add_option("--dov-resolution", p.dov_resolution, "DoV cube-map face resolution (thesis: 256)")->capture_default_str()->check(number_in(4, 1024));
+  cmd->add_option("--dov-cubes", args->dov_cubes, "DoV cube maps by rays or exact (GL at level 0, the reference)")->capture_default_str();
   cmd->add_option("--fanout", p.fanout, "HDoV-tree fan-out M")->capture_default_str()->check(number_in(4, 140));
   cmd->add_option("--queries", p.queries, "Queries per Exp. 1/2 run")->capture_default_str()->check(number_in(1, 1000000));
   cmd->add_option("--frames", p.frames, "Frames of the Exp. 3 session")->capture_default_str()->check(number_in(2, 100000));
@@ -42,6 +44,7 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   cmd->callback([args, command_line] {
     args->params.command_line = command_line();
+    args->params.dov_cubes = parse_dov_cubes(args->dov_cubes);
     const nlohmann::ordered_json summary = run_visual_bench(args->params);
     if (args->json) {
       std::printf("%s\n", summary.dump(2).c_str());

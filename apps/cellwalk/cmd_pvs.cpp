@@ -12,6 +12,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
+#include "precompute/dov_compare.hpp"
 #include "precompute/ground_truth.hpp"
 #include "precompute/pvs_builder.hpp"
 
@@ -20,9 +21,10 @@ namespace cellwalk::app {
 namespace {
 
 struct Args {
-  std::string world, out, engine = "sampling", cells = "grid:20", shard;
+  std::string world, out, engine = "sampling", cells = "grid:20", shard, dov_cubes = "rays", along;
+  float along_margin = 0.0f;
   std::vector<std::string> merge;
-  uint64_t check = 0;
+  uint64_t check = 0, dov_compare = 0;
   int gt_points = 16, gt_resolution = 1024, threads = 0;
   EngineOptions options;
   bool json = false;
@@ -103,6 +105,42 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
                             std::to_string(failing) + " cells");
 }
 
+void run_dov_compare(const Args& a, const World& world, const ViewCellPartition& partition) {
+  const std::vector<CellId> cells = visibility::cells_to_check(partition, a.dov_compare);
+  std::unique_ptr<Progress> progress;
+  const visibility::DovComparison c =
+      visibility::compare_dov_cubes(world, a.options, partition, cells, [&](uint64_t done, uint64_t total) {
+        if (!progress) progress = std::make_unique<Progress>("dov exact vs " + a.dov_cubes, total);
+        progress->update(done);
+      });
+  progress.reset();
+  const double speedup = c.mode_cells_per_second() / c.exact_cells_per_second();
+  const double engine_speedup = c.mode_engine_cells_per_second() / c.exact_engine_cells_per_second();
+  if (a.json) {
+    nlohmann::ordered_json j = {{"cells_spec", a.cells}, {"cells", c.cells}, {"resolution", c.resolution},
+                                {"mode", a.dov_cubes}, {"exact_cells_per_second", c.exact_cells_per_second()},
+                                {"mode_cells_per_second", c.mode_cells_per_second()}, {"speedup", speedup},
+                                {"step1_seconds_per_cell", c.step1_seconds / double(c.cells)},
+                                {"exact_engine_cells_per_second", c.exact_engine_cells_per_second()},
+                                {"mode_engine_cells_per_second", c.mode_engine_cells_per_second()},
+                                {"engine_speedup", engine_speedup}, {"max_dov_difference", c.max_difference},
+                                {"largest_pixel_weight", c.largest_pixel_weight}, {"pairs", c.pairs},
+                                {"one_sided", c.one_sided}, {"one_sided_max_dov", c.one_sided_max_dov}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("dov cube maps at %d² on %llu %s cells, exact vs %s interleaved:\n"
+              "  exact %.3f cells/s, %s %.3f cells/s: %.1fx\n"
+              "  with step 1 (sampling, %.3f s/cell): exact %.3f cells/s, %s %.3f cells/s: %.1fx\n"
+              "  max |DoV difference| %.3g (%.2f of the largest pixel weight %.3g); %llu of %llu (cell, object) pairs "
+              "in one set only, largest DoV among them %.3g\n",
+              c.resolution, (unsigned long long)c.cells, a.cells.c_str(), a.dov_cubes.c_str(), c.exact_cells_per_second(),
+              a.dov_cubes.c_str(), c.mode_cells_per_second(), speedup, c.step1_seconds / double(c.cells),
+              c.exact_engine_cells_per_second(), a.dov_cubes.c_str(), c.mode_engine_cells_per_second(), engine_speedup,
+              c.max_difference, c.max_difference / c.largest_pixel_weight, c.largest_pixel_weight,
+              (unsigned long long)c.one_sided, (unsigned long long)c.pairs, c.one_sided_max_dov);
+}
+
 void run_merge(const Args& a, const World& world) {
   const std::string out = a.out.empty() ? a.world : a.out;
   refuse_same_files(a.merge, {out});
@@ -116,11 +154,21 @@ void run_merge(const Args& a, const World& world) {
   print_sizes(sizes);
 }
 
+// The cells spec's partition, restricted to the cells along the --along path when one is given.
+std::unique_ptr<ViewCellPartition> cells_of_run(const Args& a, const World& world) {
+  const visibility::EmbreeScene scene(world);
+  std::unique_ptr<ViewCellPartition> partition = visibility::make_partition(a.cells, world, scene);
+  if (a.along.empty()) return partition;
+  const CameraPath path = read_path(a.along);
+  warn_if_other_world(path, a.along, world.info(), a.world);
+  return visibility::cells_along(*partition, path, a.along_margin);
+}
+
 void run_compute(const Args& a, const World& world) {
+  if (a.dov_compare > 0) return run_dov_compare(a, world, *cells_of_run(a, world));
   auto setup = std::chrono::steady_clock::now();
   const std::unique_ptr<VisibilityEngine> engine = make_engine(a.engine, world, a.options);
-  const visibility::EmbreeScene scene(world);
-  const std::unique_ptr<ViewCellPartition> partition = visibility::make_partition(a.cells, world, scene);
+  const std::unique_ptr<ViewCellPartition> partition = cells_of_run(a, world);
   const double setup_s = seconds_since(setup);
   const visibility::PvsRun run = visibility::make_pvs_run(*engine, a.cells, a.options, a.shard, a.threads);
   if (a.check > 0) return run_check(a, world, *engine, *partition);
@@ -148,22 +196,26 @@ void run_compute(const Args& a, const World& world) {
     sizes = visibility::write_world_with_pvs(world, out, *partition, sets, run);
     std::filesystem::remove(checkpoint);
   }
-  uint64_t solid = 0;
-  for (CellId c = 0; c < partition->cell_count(); ++c) solid += partition->cell(c).solid ? 1 : 0;
+  uint64_t solid = 0, skipped = 0;
+  for (CellId c = 0; c < partition->cell_count(); ++c) {
+    solid += partition->cell(c).solid ? 1 : 0;
+    skipped += partition->cell(c).skipped ? 1 : 0;
+  }
   const double rate = double(computed) / std::max(compute_s, 1e-9);
   if (a.json) {
     nlohmann::ordered_json j = {{"output", out}, {"engine", engine->name()}, {"cells_spec", a.cells},
                                 {"partition", partition->kind()}, {"cells", partition->cell_count()},
-                                {"solid_cells", solid}, {"shard", run.shard}, {"shards", run.shards},
+                                {"solid_cells", solid}, {"skipped_cells", skipped}, {"shard", run.shard}, {"shards", run.shards},
                                 {"computed", computed}, {"resumed", resumed}, {"setup_seconds", setup_s},
                                 {"seconds", compute_s}, {"cells_per_second", rate}};
     if (!sharded) j["sizes"] = sizes_json(sizes);
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("pvs %s: %zu %s cells (%llu solid); computed %llu (%llu resumed) in %.1f s, %.2f cells/s; setup %.1f s\n",
+  std::printf("pvs %s: %zu %s cells (%llu solid, %llu skipped off the --along path); computed %llu (%llu resumed) in %.1f s, "
+              "%.2f cells/s; setup %.1f s\n",
               engine->name().c_str(), partition->cell_count(), partition->kind().c_str(), (unsigned long long)solid,
-              (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
+              (unsigned long long)skipped, (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
   if (!sharded) print_sizes(sizes);
   std::printf("  wrote %s\n", out.c_str());
 }
@@ -175,9 +227,13 @@ void register_pvs(CLI::App& root) {
   auto a = std::make_shared<Args>();
   std::string engines;
   for (const std::string& n : engine_names()) engines += (engines.empty() ? "" : "|") + n;
+  std::string dov_modes;
+  for (const std::string& n : dov_cubes_names()) dov_modes += (dov_modes.empty() ? "" : "|") + n;
   cmd->add_option("world", a->world, "World file (.cww)")->required();
   cmd->add_option("--engine", a->engine, "Visibility engine: " + engines)->capture_default_str();
   cmd->add_option("--cells", a->cells, "View cells: grid:SIZE | grid3d:SIZE | kd:SIZE | octree[:ROOT[:THRESHOLD[:DEPTH]]]")->capture_default_str();
+  auto* along = cmd->add_option("--along", a->along, "Compute only the cells near this camera path (cellwalk path); the others are stored as skipped, and a walk entering one is refused");
+  cmd->add_option("--along-margin", a->along_margin, "--along: metres around the path whose cells are computed")->capture_default_str()->check(number_in(0, 1e6))->needs(along);
   cmd->add_option("--shard", a->shard, "Compute only shard i of N equal cell-id ranges into a part file (i/N)");
   cmd->add_option("--merge", a->merge, "Merge the part files of every shard into the world")->expected(1, -1);
   cmd->add_option("-o,--output", a->out, "World to write (default: WORLD in place; WORLD.part-i-of-N for a shard)");
@@ -189,10 +245,15 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str()->check(integer_in(0, 10000));
   cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str()->check(integer_in(0, 8));
   cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str()->check(integer_in(4, 4096));
+  cmd->add_option("--dov-cubes", a->dov_cubes, "DoV: cube maps by " + dov_modes + " (exact: GL at level 0, the reference)")->capture_default_str();
+  cmd->add_option("--dov-compare", a->dov_compare, "DoV: time exact against --dov-cubes on this many cells, interleaved, and print how far their DoVs differ; write nothing")->check(integer_in(0, 100000));
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
   cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_flag("--json", a->json, "Print the report as JSON");
   cmd->callback([a] {
+    a->options.dov_cubes = parse_dov_cubes(a->dov_cubes);
+    if (a->dov_compare > 0 && a->engine != "dov")
+      fail("pvs --dov-compare", "compares the dov engine's cube-map modes; give --engine dov");
     const World world(a->world);
     if (!a->merge.empty()) return run_merge(*a, world);
     run_compute(*a, world);

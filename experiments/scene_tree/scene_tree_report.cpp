@@ -98,6 +98,7 @@ Json precompute_dov(const SceneTreeBenchParams& p, const World& world, const Vie
   for (const auto& [cell, set] : sets) mean_visible += double(set.objects.size());
   return {{"cells", cells.cell_count()},
           {"resolution", p.dov_resolution},
+          {"cubes", dov_cubes_name(options.dov_cubes)},
           {"seconds", seconds},
           {"seconds_per_cell", seconds / double(std::max<size_t>(1, cells.cell_count()))},
           {"mean_visible_objects", mean_visible / double(std::max<size_t>(1, sets.size()))},
@@ -469,8 +470,8 @@ std::string setup_markdown(const Json& s) {
         fixed(s["path"]["length_m"].get<double>(), 0) + " m, " + std::to_string(s["params"]["width"].get<int>()) + "×" +
         std::to_string(s["params"]["height"].get<int>()) + " pixels, 60° vertical field of view.\n";
   md += "- DoV: the `dov` engine (8 corners × 6 cube faces, eq. 5.11 weights; step 1 = the sampling engine) at **" +
-        std::to_string(d["resolution"].get<int>()) + "² per face** (the thesis: 256²; lowered because llvmpipe renders " +
-        "each face in software) over " + std::to_string(d["cells"].get<uint64_t>()) + " cells of " +
+        std::to_string(d["resolution"].get<int>()) + "² per face** (the thesis: 256², `--dov-resolution 256`), cube maps by " +
+        d["cubes"].get<std::string>() + " (docs/visibility.md, \"DoV cube maps\"), over " + std::to_string(d["cells"].get<uint64_t>()) + " cells of " +
         fixed(s["params"]["cell_size"].get<double>(), 0) + " m around the path (the thesis: a 64×64 grid over the city), " +
         fixed(d["seconds_per_cell"].get<double>(), 2) + " s per cell (thesis: ~1 s at 256² on a GeForce2), " +
         fixed(d["mean_visible_objects"].get<double>(), 0) + " visible objects per cell on average.\n";

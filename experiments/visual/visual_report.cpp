@@ -47,11 +47,11 @@ struct Report {
   void plot(const std::string& file, const LinePlot& plot) { write_file_atomically((dir / file).string(), render_svg(plot)); }
 };
 
-// Non-solid cells with something visible.
+// Computed cells with something visible.
 std::vector<CellId> usable_cells(const HdovTree& tree) {
   std::vector<CellId> cells;
   for (CellId c = 0; c < tree.cell_count(); ++c)
-    if (!tree.cells().cell(c).solid && tree.iv_directory()[c].second > 0) cells.push_back(c);
+    if (tree.cells().cell(c).computed() && tree.iv_directory()[c].second > 0) cells.push_back(c);
   return cells;
 }
 
@@ -403,7 +403,7 @@ void walk_section(const VisualBenchParams& p, const TreeWorld& w, const CameraPa
   r.md += "## Exp. 3 (Table 5.3, Figs. 5.24–5.27): walkthrough vs REVIEW\n\nOne normal session of " + std::to_string(p.frames) +
           " frames (" + fixed(path.frames.back().time, 0) + " s at walking speed) through the default city, with view cells of " +
           fixed(p.walk_cell_size, 0) + " m along it (" + std::to_string(w.dov_cells) + " cells get a DoV, " +
-          fixed(w.dov_seconds, 0) + " s; the cells the path does not enter are marked solid): VISUAL makes " +
+          fixed(w.dov_seconds, 0) + " s; the cells the path does not enter are skipped, as `pvs --along` skips them): VISUAL makes " +
           std::to_string(first.queries) + " queries (" + std::to_string(first.queries - 1) +
           " cell changes). VISUAL-full is VISUAL with every visible object at level 0 instead of eq. 5.6's level "
           "(`visual:eta=X,maxdov=0.000000001`), so η alone trades detail. Replayed headless by every system in one run: frame time = measured select + mesh fetches + "
@@ -590,8 +590,8 @@ Json run_visual_bench(const VisualBenchParams& p) {
   r.md += "Setup: a generated city of " + std::to_string(p.objects) + " objects (" + std::to_string(main.world->triangle_count()) +
           " triangles at level 0), " + std::to_string(tree.cell_count()) + " grid view cells of " + fixed(side, 0) + " m (" +
           std::to_string(usable.size()) + " see something), DoV by the `dov` engine at **" + std::to_string(p.dov_resolution) +
-          "² per cube face** (the thesis: 256²; lowered to keep the bench near 10 minutes on 2 cores; " + fixed(main.dov_seconds, 1) +
-          " s for all cells), HDoV-tree M = " + std::to_string(tree.max_entries()) + ", " + std::to_string(tree.node_count()) +
+          "² per cube face** (the thesis: 256²), cube maps by " + dov_cubes_name(p.dov_cubes) +
+          " (docs/visibility.md, \"DoV cube maps\"; " + fixed(main.dov_seconds, 1) + " s for all cells), HDoV-tree M = " + std::to_string(tree.max_entries()) + ", " + std::to_string(tree.node_count()) +
           " nodes, height " + std::to_string(tree.height()) + " (built in " + fixed(main.tree_seconds, 1) + " s).\n\n";
   storage_section(main, r);
   Random rng(p.seed);

@@ -12,16 +12,19 @@
 #include <string>
 #include <vector>
 
+#include "cellwalk/precompute/engine.hpp"
+
 namespace cellwalk {
 
 struct VisualBenchParams {
   uint64_t objects = 1500;            // buildings of the city
   int cells_per_side = 8;             // view-cell grid over the city (cells_per_side²)
-  int dov_resolution = 32;            // cube-map face resolution of the DoV engine (thesis: 256)
+  int dov_resolution = 256;           // cube-map face resolution of the DoV engine (the thesis's)
+  DovCubes dov_cubes = DovCubes::kRays;  // how the DoV engine makes its cube maps
   uint32_t fanout = 8;                // M
   int queries = 400;                  // per Exp. 1 / Exp. 2 configuration
   int frames = 600;                   // Exp. 3 path ("normal" session at 10 fps: ~120 m)
-  float walk_cell_size = 5.0f;        // Exp. 3: view cells along the path (many cell changes)
+  float walk_cell_size = 20.0f;       // Exp. 3: view cells along the path (the demo's 20 m)
   int fidelity_every = 20;            // Exp. 3: compare every k-th frame against ground truth
   int width = 640, height = 480;      // Exp. 3 fidelity images
   std::vector<uint64_t> scale_objects = {375, 750, 3000};  // Fig. 5.23: cities besides the default one

@@ -30,11 +30,12 @@ TreeWorld add_dov_and_tree(const VisualBenchParams& p, const std::string& raw, c
                            const fs::path& dir, const std::string& name) {
   TreeWorld s;
   s.world_file = (dir / (name + ".cww")).string();
-  for (CellId c = 0; c < cells.cell_count(); ++c) s.dov_cells += cells.cell(c).solid ? 0 : 1;
+  for (CellId c = 0; c < cells.cell_count(); ++c) s.dov_cells += cells.cell(c).computed() ? 1 : 0;
   {
     const World city(raw);
     EngineOptions options;
     options.dov_resolution = p.dov_resolution;
+    options.dov_cubes = p.dov_cubes;
     const auto engine = make_engine("dov", city, options);
     const visibility::PvsRun run = visibility::make_pvs_run(*engine, "visual bench cells " + std::to_string(cells.cell_count()),
                                                             options, "", p.threads);
@@ -88,14 +89,7 @@ std::unique_ptr<ViewCellPartition> path_grid(const World& city, const CameraPath
   for (const PathFrame& f : path.frames) box.extend(f.position);
   region.bounds.min = Vec3(box.min.x - side / 2, region.bounds.min.y, box.min.z - side / 2);
   region.bounds.max = Vec3(box.max.x + side / 2, region.bounds.max.y, box.max.z + side / 2);
-  // A cell no frame stands in gets no DoV; x/z only (2D cells span the eye heights).
-  const auto entered = [&path](const Aabb& cell) {
-    return std::any_of(path.frames.begin(), path.frames.end(), [&](const PathFrame& f) {
-      return f.position.x >= cell.min.x && f.position.x <= cell.max.x && f.position.z >= cell.min.z &&
-             f.position.z <= cell.max.z;
-    });
-  };
-  return make_grid_partition(region, side, [&](const Aabb& cell) { return !entered(cell); });
+  return visibility::cells_along(*make_grid_partition(region, side), path, 0.0f);
 }
 
 }  // namespace cellwalk::visual_bench

@@ -27,11 +27,11 @@ struct TreeWorld {
   std::unique_ptr<World> world;
   std::unique_ptr<HdovTree> tree;
   uint64_t visible_nodes = 0;  // Σ over cells of N_vnode
-  size_t dov_cells = 0;        // cells whose DoV was computed (the others are marked solid)
+  size_t dov_cells = 0;        // cells whose DoV was computed (the others are solid or skipped)
   double dov_seconds = 0, tree_seconds = 0;
 };
 
-// Computes the DoV of every non-solid cell of `cells` over the city `raw` (at p.dov_resolution),
+// Computes the DoV of every cell of `cells` that is neither solid nor skipped over the city `raw` (at p.dov_resolution),
 // writes dir/<name>.cww with them and builds dir/<name>.cww.hdov (fan-out p.fanout).
 TreeWorld add_dov_and_tree(const VisualBenchParams& p, const std::string& raw, const ViewCellPartition& cells,
                            const std::filesystem::path& dir, const std::string& name);
@@ -44,7 +44,8 @@ std::unique_ptr<ViewCellPartition> city_grid(const World& city, float side);
 // the same cell size and count in every city, so only the world grows).
 std::unique_ptr<ViewCellPartition> central_grid(const World& city, float side, int per_side);
 // A grid of cells of `side` over the path's x/z box in which only the cells the path enters get a
-// DoV (the rest are marked solid): Exp. 3's many cell changes without precomputing empty streets.
+// DoV (the rest are skipped, as `pvs --along` skips them): Exp. 3's cell changes without
+// precomputing empty streets.
 std::unique_ptr<ViewCellPartition> path_grid(const World& city, const CameraPath& path, float side);
 
 }  // namespace cellwalk::visual_bench

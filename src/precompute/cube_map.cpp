@@ -17,7 +17,6 @@ namespace cellwalk::visibility {
 
 namespace {
 
-constexpr float kNearPlane = 0.05f;
 constexpr std::array<std::array<float, 2>, 6> kFaces = {{{0, 0}, {90, 0}, {180, 0}, {270, 0}, {0, 90}, {0, -90}}};
 
 // ∫∫ dx dy / (x² + y² + 1)^{3/2} over [0, x] × [0, y]: the solid angle of a rectangle on the
@@ -25,6 +24,28 @@ constexpr std::array<std::array<float, 2>, 6> kFaces = {{{0, 0}, {90, 0}, {180, 
 double corner_solid_angle(double x, double y) { return std::atan(x * y / std::sqrt(x * x + y * y + 1.0)); }
 
 }  // namespace
+
+Camera cube_face_camera(const Vec3& p, size_t face, float far_plane) {
+  Camera camera;
+  camera.position = p;
+  camera.yaw_deg = kFaces.at(face)[0];
+  camera.pitch_deg = kFaces.at(face)[1];
+  camera.fov_y_deg = 90.0f;
+  camera.aspect = 1.0f;
+  camera.near_plane = kCubeNearPlane;
+  camera.far_plane = far_plane;
+  return camera;
+}
+
+float cube_far_plane(const World& world) { return 2.0f * glm::length(world.info().bounds.size()) + 10.0f; }
+
+// A face is one square framebuffer: at least a pixel, at most what any GL driver allocates.
+int checked_cube_resolution(int resolution) {
+  if (resolution < 1 || resolution > kMaxCubeResolution)
+    fail("cube map", "face resolution " + std::to_string(resolution) + " must lie in [1, " +
+                         std::to_string(kMaxCubeResolution) + "]; give a resolution such as 256");
+  return resolution;
+}
 
 struct CubeMapRenderer::Impl {
   const World& world;
@@ -39,7 +60,7 @@ struct CubeMapRenderer::Impl {
   std::thread thread;
 
   Impl(const World& w, int r) : world(w), resolution(r) {
-    far_plane = 2.0f * glm::length(w.info().bounds.size()) + 10.0f;
+    far_plane = cube_far_plane(w);
     std::future<void> ready = started.get_future();
     thread = std::thread([this] { run(); });
     try {
@@ -93,14 +114,7 @@ struct CubeMapRenderer::Impl {
       return &current;
     };
     for (size_t f = 0; f < 6; ++f) {
-      Camera camera;
-      camera.position = p;
-      camera.yaw_deg = kFaces[f][0];
-      camera.pitch_deg = kFaces[f][1];
-      camera.fov_y_deg = 90.0f;
-      camera.aspect = 1.0f;
-      camera.near_plane = kNearPlane;
-      camera.far_plane = far_plane;
+      const Camera camera = cube_face_camera(p, f, far_plane);
       const Frustum frustum(camera);
       std::vector<DrawItem> items;
       for (ObjectId id = 0; id < world.object_count(); ++id)
@@ -113,18 +127,8 @@ struct CubeMapRenderer::Impl {
   }
 };
 
-namespace {
-// A face is one square framebuffer: at least a pixel, at most what any GL driver allocates.
-int checked_resolution(int resolution) {
-  if (resolution < 1 || resolution > kMaxCubeResolution)
-    fail("cube map", "face resolution " + std::to_string(resolution) + " must lie in [1, " +
-                         std::to_string(kMaxCubeResolution) + "]; give a resolution such as 256");
-  return resolution;
-}
-}  // namespace
-
 CubeMapRenderer::CubeMapRenderer(const World& world, int resolution)
-    : resolution_(checked_resolution(resolution)), impl_(std::make_unique<Impl>(world, resolution)) {}
+    : resolution_(checked_cube_resolution(resolution)), impl_(std::make_unique<Impl>(world, resolution)) {}
 
 CubeMapRenderer::~CubeMapRenderer() = default;
 

@@ -4,6 +4,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <array>
 #include <cstring>
 #include <mutex>
 
@@ -84,6 +86,27 @@ std::optional<ObjectId> EmbreeScene::first_hit(const Vec3& origin, const Vec3& d
   rtcIntersect1(scene_, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
   return rh.hit.geomID;
+}
+
+void EmbreeScene::first_hits(const Vec3& origin, std::span<const Vec3> dirs, float near, float far,
+                             std::span<uint32_t> ids) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // one origin, neighbouring directions
+  constexpr size_t kStream = 256;
+  std::array<RTCRayHit, kStream> rays;
+  for (size_t from = 0; from < dirs.size(); from += kStream) {
+    const size_t n = std::min(kStream, dirs.size() - from);
+    // Unit directions with t rescaled: Embree 3.13's coherent traversal misses hits (rays pass
+    // through walls) when directions are not unit length.
+    for (size_t i = 0; i < n; ++i) {
+      const float length = glm::length(dirs[from + i]);
+      rays[i] = make_ray(origin, dirs[from + i] / length, near * length, far * length);
+    }
+    rtcIntersect1M(scene_, &context, rays.data(), unsigned(n), sizeof(RTCRayHit));
+    for (size_t i = 0; i < n; ++i)
+      ids[from + i] = rays[i].hit.geomID == RTC_INVALID_GEOMETRY_ID ? 0 : rays[i].hit.geomID + 1;
+  }
 }
 
 bool EmbreeScene::inside(ObjectId id, const Vec3& p) const {

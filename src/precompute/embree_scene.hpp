@@ -26,6 +26,12 @@ class EmbreeScene {
   // The first object hit along origin + t·dir for t in (0, far), nullopt if none.
   std::optional<ObjectId> first_hit(const Vec3& origin, const Vec3& dir, float far) const;
 
+  // Rays sharing one origin, cast as a coherent stream: ids[i] = 1 + the first object hit along
+  // origin + t·dirs[i] for t in [near, far], 0 if none. t is in units of |dirs[i]|, so a
+  // direction whose component along a view axis is 1 clips at view depths near and far, as a
+  // GL projection does. REQUIRES ids.size() == dirs.size().
+  void first_hits(const Vec3& origin, std::span<const Vec3> dirs, float near, float far, std::span<uint32_t> ids) const;
+
   // Whether p is provably inside the solid object `id`'s mesh bounds: the mesh is closed
   // (is_closed) and visibility::solid_at says so, by winding number when the mesh is oriented,
   // else by parity, along six rays that must agree. Never for an open mesh (a plane, a slanted

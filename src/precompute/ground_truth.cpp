@@ -37,7 +37,7 @@ namespace cellwalk::visibility {
 std::vector<CellId> cells_to_check(const ViewCellPartition& partition, uint64_t count) {
   std::vector<CellId> open;
   for (CellId c = 0; c < partition.cell_count(); ++c)
-    if (!partition.cell(c).solid) open.push_back(c);
+    if (partition.cell(c).computed()) open.push_back(c);
   if (open.size() <= count) return open;
   std::vector<CellId> out;
   for (uint64_t i = 0; i < count; ++i) out.push_back(open[(2 * i + 1) * open.size() / (2 * count)]);

@@ -40,7 +40,7 @@ struct CellCheck {
   double tightness() const { return truth_size ? double(set_size) / double(truth_size) : (set_size ? INFINITY : 1.0); }
 };
 
-// `count` non-solid cells spread evenly over the ids (all of them when there are fewer).
+// `count` cells with sets (neither solid nor skipped) spread evenly over the ids (all of them when there are fewer).
 std::vector<CellId> cells_to_check(const ViewCellPartition& partition, uint64_t count);
 
 CellCheck check_cell(const VisibilityEngine& engine, const CubeMapRenderer& cube, const ViewCell& cell,

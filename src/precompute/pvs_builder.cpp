@@ -266,6 +266,44 @@ std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const
   fail("cells spec '" + spec + "'", "expected grid:SIZE, grid3d:SIZE, kd:SIZE or octree[:ROOT[:THRESHOLD[:DEPTH]]]");
 }
 
+namespace {
+
+// Whether the segment a→b meets `box` (slab test; a degenerate segment is its point).
+bool segment_meets_box(const Vec3& a, const Vec3& b, const Aabb& box) {
+  double t0 = 0.0, t1 = 1.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double from = a[axis], d = double(b[axis]) - from;
+    if (d == 0.0) {
+      if (from < box.min[axis] || from > box.max[axis]) return false;
+      continue;
+    }
+    double lo = (box.min[axis] - from) / d, hi = (box.max[axis] - from) / d;
+    if (lo > hi) std::swap(lo, hi);
+    t0 = std::max(t0, lo);
+    t1 = std::min(t1, hi);
+    if (t0 > t1) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::unique_ptr<ViewCellPartition> cells_along(const ViewCellPartition& partition, const CameraPath& path, float margin) {
+  if (path.frames.empty()) fail("--along", "the path has no frames; give a path made by `cellwalk path`");
+  if (!(margin >= 0.0f) || !std::isfinite(margin))
+    fail("--along-margin", std::to_string(margin) + " must be a finite number of metres >= 0");
+  Aabb reach;  // the path's box: most cells of a large partition are far from all of it
+  for (const PathFrame& f : path.frames) reach.extend(f.position);
+  return skip_cells(partition, [&](const ViewCell& cell) {
+    const Aabb grown{cell.box.min - Vec3(margin), cell.box.max + Vec3(margin)};
+    if (!grown.overlaps(reach)) return false;
+    for (size_t i = 0; i < path.frames.size(); ++i)
+      if (segment_meets_box(path.frames[i].position, path.frames[i + 1 < path.frames.size() ? i + 1 : i].position, grown))
+        return true;
+    return false;
+  });
+}
+
 PvsRun make_pvs_run(const VisibilityEngine& engine, const std::string& cells_spec, const EngineOptions& o,
                     const std::string& shard, int threads) {
   PvsRun run;
@@ -273,7 +311,7 @@ PvsRun make_pvs_run(const VisibilityEngine& engine, const std::string& cells_spe
   run.conservative = engine.conservative();
   run.settings = cells_spec + " points=" + std::to_string(o.sample_points) + " rays=" + std::to_string(o.rays_per_point) +
                  " aimed=" + std::to_string(o.aimed_rays_per_object) + " seed=" + std::to_string(o.seed) +
-                 " dov=" + std::to_string(o.dov_resolution) +
+                 " dov=" + std::to_string(o.dov_resolution) + " cubes=" + dov_cubes_name(o.dov_cubes) +
                  (run.conservative ? " refine=" + std::to_string(o.refine_levels) : "") +
                  (o.dov_midpoint_weights ? " midpoint" : "");
   run.threads = threads;
@@ -286,7 +324,7 @@ std::vector<CellId> shard_cells(const ViewCellPartition& partition, int shard, i
   const uint64_t n = partition.cell_count();
   std::vector<CellId> out;
   for (uint64_t c = n * uint64_t(shard) / uint64_t(shards); c < n * uint64_t(shard + 1) / uint64_t(shards); ++c)
-    if (!partition.cell(CellId(c)).solid) out.push_back(CellId(c));
+    if (partition.cell(CellId(c)).computed()) out.push_back(CellId(c));
   return out;
 }
 

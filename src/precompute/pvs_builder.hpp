@@ -9,6 +9,7 @@
 #include <optional>
 #include <string>
 
+#include "cellwalk/core/camera_path.hpp"
 #include "cellwalk/precompute/engine.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 #include "precompute/embree_scene.hpp"
@@ -22,13 +23,19 @@ namespace cellwalk::visibility {
 std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const World& world,
                                                   const EmbreeScene& scene);
 
+// `partition` with every cell farther than `margin` metres from the camera path skipped: a
+// cell is kept when the path's polyline (frame to frame) meets its box grown by `margin` on
+// every side (so corners reach up to margin·√3). Throws Error for a path with no frames or a
+// margin that is negative or not finite.
+std::unique_ptr<ViewCellPartition> cells_along(const ViewCellPartition& partition, const CameraPath& path, float margin);
+
 // The identity of a run: the engine and everything else that changes its sets (the cells spec
 // and the engine's options), stored in checkpoints and part files so a resumed or merged run
 // is the same run. `shard` is "" (the whole partition) or "i/N". Throws Error on a bad shard.
 PvsRun make_pvs_run(const VisibilityEngine& engine, const std::string& cells_spec, const EngineOptions& options,
                     const std::string& shard = "", int threads = 0);
 
-// The non-solid cells of shard `shard` of `shards`: ids in [shard·C/shards, (shard+1)·C/shards).
+// The cells to compute (neither solid nor skipped) of shard `shard` of `shards`: ids in [shard·C/shards, (shard+1)·C/shards).
 std::vector<CellId> shard_cells(const ViewCellPartition& partition, int shard, int shards);
 
 // Computes the sets of the run's cells in parallel, appending each to `checkpoint` as it

@@ -44,8 +44,12 @@ uint64_t box_seed(const Aabb& box, uint64_t seed) {
 
 }  // namespace
 
-SamplingEngine::SamplingEngine(const World& world, const EngineOptions& options)
-    : world_(world), options_(options), scene_(world), directions_(fibonacci_sphere(options.rays_per_point)) {
+SamplingEngine::SamplingEngine(const World& world, const EngineOptions& options,
+                               std::shared_ptr<const EmbreeScene> scene)
+    : world_(world),
+      options_(options),
+      scene_(scene ? std::move(scene) : std::make_shared<const EmbreeScene>(world)),
+      directions_(fibonacci_sphere(options.rays_per_point)) {
   far_ = 2.0f * glm::length(world.info().bounds.size()) + 1.0f;
 }
 
@@ -58,13 +62,13 @@ VisibleSet SamplingEngine::compute(const ViewCell& cell) const {
   for (const Vec3& p : points) {
     const glm::quat q = random_rotation(rng);
     for (const Vec3& d : directions_)
-      if (auto id = scene_.first_hit(p, q * d, far_)) hits.push_back(*id);
+      if (auto id = scene_->first_hit(p, q * d, far_)) hits.push_back(*id);
     for (ObjectId target = 0; target < world_.object_count(); ++target) {
       const Aabb& b = world_.object(target).bounds;
       for (int k = 0; k < options_.aimed_rays_per_object; ++k) {
         const Vec3 at(rng.uniform(b.min.x, b.max.x), rng.uniform(b.min.y, b.max.y), rng.uniform(b.min.z, b.max.z));
         if (at == p) continue;
-        if (auto id = scene_.first_hit(p, glm::normalize(at - p), far_)) hits.push_back(*id);
+        if (auto id = scene_->first_hit(p, glm::normalize(at - p), far_)) hits.push_back(*id);
       }
     }
     // Keep the list short: most rays hit the same few objects.

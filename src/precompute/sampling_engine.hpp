@@ -4,6 +4,8 @@
 // object seen only through a gap no ray passes is missed, so it is not conservative.
 #pragma once
 
+#include <memory>
+
 #include "cellwalk/precompute/engine.hpp"
 #include "precompute/embree_scene.hpp"
 
@@ -11,7 +13,8 @@ namespace cellwalk::visibility {
 
 class SamplingEngine : public VisibilityEngine {
  public:
-  SamplingEngine(const World& world, const EngineOptions& options);
+  // `scene` (optional) is `world`'s level-0 Embree scene when the caller already holds one.
+  SamplingEngine(const World& world, const EngineOptions& options, std::shared_ptr<const EmbreeScene> scene = nullptr);
   std::string name() const override { return "sampling"; }
   bool conservative() const override { return false; }
   // Deterministic: the random points and direction rotations are seeded from the cell's box.
@@ -20,7 +23,7 @@ class SamplingEngine : public VisibilityEngine {
  private:
   const World& world_;
   EngineOptions options_;
-  EmbreeScene scene_;
+  std::shared_ptr<const EmbreeScene> scene_;
   std::vector<Vec3> directions_;  // a Fibonacci sphere, rotated per point
   float far_;
 };

@@ -24,7 +24,11 @@ struct FlatNode {
   CellId cell = kNoCell;
   uint32_t depth = 0;
   bool solid = false;
+  bool skipped = false;
 };
+
+// The node flags of the "cells" section (docs/format.md).
+constexpr uint32_t kSolidFlag = 1, kSkippedFlag = 2;
 
 // Boundary points belong to the child with the larger coordinate, except on the parent's own
 // upper faces, which close the box.
@@ -53,7 +57,7 @@ class CellTree : public ViewCellPartition {
     for (uint32_t n = 0; n < nodes_.size(); ++n) {
       if (nodes_[n].cell == kNoCell) continue;
       if (nodes_[n].cell >= cells_.size()) cells_.resize(nodes_[n].cell + 1);
-      cells_[nodes_[n].cell] = ViewCell{nodes_[n].cell, nodes_[n].box, nodes_[n].depth, nodes_[n].solid};
+      cells_[nodes_[n].cell] = ViewCell{nodes_[n].cell, nodes_[n].box, nodes_[n].depth, nodes_[n].solid, nodes_[n].skipped};
     }
   }
 
@@ -223,6 +227,24 @@ namespace cellwalk {
 using visibility::CellTree;
 using visibility::FlatNode;
 
+std::unique_ptr<ViewCellPartition> skip_cells(const ViewCellPartition& partition,
+                                              const std::function<bool(const ViewCell&)>& keep) {
+  const auto* tree = dynamic_cast<const CellTree*>(&partition);
+  if (!tree) fail("view cells", "only cellwalk's own partitions can skip cells");
+  std::vector<FlatNode> nodes = tree->nodes();
+  for (FlatNode& n : nodes)
+    if (n.cell != visibility::kNoCell && !n.solid) n.skipped = !keep(partition.cell(n.cell));
+  return std::make_unique<CellTree>(tree->kind(), tree->grid(), std::move(nodes));
+}
+
+void fail_in_skipped_cell(const std::string& system, const ViewCell& cell, const Vec3& p) {
+  char where[96];
+  std::snprintf(where, sizeof where, "the camera at (%.1f, %.1f, %.1f)", p.x, p.y, p.z);
+  fail(system, std::string(where) + " is in view cell " + std::to_string(cell.id) +
+                   ", which `cellwalk pvs --along` left out; rerun pvs with the path it walks, a larger " +
+                   "--along-margin, or without --along");
+}
+
 std::vector<uint8_t> serialize_partition(const ViewCellPartition& partition) {
   const auto* tree = dynamic_cast<const CellTree*>(&partition);
   if (!tree) fail("view cells", "only cellwalk's own partitions can be stored");
@@ -241,7 +263,7 @@ std::vector<uint8_t> serialize_partition(const ViewCellPartition& partition) {
     w.put(n.child_count);
     w.put(n.cell);
     w.put(n.depth);
-    w.put(uint32_t(n.solid ? 1 : 0));
+    w.put((n.solid ? visibility::kSolidFlag : 0) | (n.skipped ? visibility::kSkippedFlag : 0));
   }
   return std::move(w.bytes());
 }
@@ -272,7 +294,10 @@ std::unique_ptr<ViewCellPartition> deserialize_partition(std::span<const uint8_t
     n.child_count = r.get<uint32_t>("child count");
     n.cell = r.get<uint32_t>("cell");
     n.depth = r.get<uint32_t>("depth");
-    n.solid = r.get<uint32_t>("flags") & 1;
+    const uint32_t flags = r.get<uint32_t>("flags");
+    if (flags & ~(visibility::kSolidFlag | visibility::kSkippedFlag)) r.error("node " + std::to_string(i) + " has unknown flags " + std::to_string(flags));
+    n.solid = flags & visibility::kSolidFlag;
+    n.skipped = flags & visibility::kSkippedFlag;
     // Children after their parent keeps descent finite; leaves own exactly one cell.
     if (n.child_count > 8 || (n.child_count > 0 && (n.first_child <= i || uint64_t(n.first_child) + n.child_count > node_count)))
       r.error("node " + std::to_string(i) + " has bad children");

@@ -103,7 +103,7 @@ void write_section(WorldWriter& w, const char* name, std::span<const uint8_t> by
 PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
                               const CellSets& sets, const PvsRun& run) {
   for (CellId c = 0; c < partition.cell_count(); ++c)
-    if (!partition.cell(c).solid && !sets.count(c))
+    if (partition.cell(c).computed() && !sets.count(c))
       fail("pvs", "cell " + std::to_string(c) + " has no visible set; compute or merge every shard first");
   PvsSizes sizes;
   const std::vector<uint8_t> pvs = encode_pvs_section(partition, sets, world.object_count(), run, sizes);
@@ -183,6 +183,8 @@ std::vector<ObjectId> StoredPvs::decode(CellId cell, int depth) const {
 
 std::optional<VisibleSet> StoredPvs::set(CellId cell) const {
   const std::span<const uint8_t> rec = record(cell);
+  if (partition_->cell(cell).skipped)
+    fail("pvs cell " + std::to_string(cell), "has no set: `cellwalk pvs --along` left it out; rerun pvs with a larger --along-margin or without --along");
   if (!rec.empty() && rec[0] == kNoSet) return std::nullopt;
   VisibleSet set;
   set.objects = decode(cell, 0);

@@ -25,6 +25,17 @@ class VisibilityEngine {
 
 // ---- Engines that exist (src/precompute/engine_registry.cpp) --------------------------------
 
+// How the DoV engine makes its ID cube maps (docs/visibility.md, "DoV cube maps"): `exact`
+// renders every object at level 0 through GL, the reference; `rays` casts one Embree ray per
+// pixel centre over the same level-0 meshes, equal to exact within the silhouette tolerance.
+enum class DovCubes { kRays, kExact };
+
+// "rays", "exact".
+std::string dov_cubes_name(DovCubes cubes);
+std::vector<std::string> dov_cubes_names();
+// Throws Error listing dov_cubes_names() for an unknown name.
+DovCubes parse_dov_cubes(const std::string& name);
+
 struct EngineOptions {
   // Sampling: rays are cast from corners, face centres, the centre and this many random points
   // on the faces and inside, each over this many directions spread over the whole sphere.
@@ -40,6 +51,9 @@ struct EngineOptions {
   // DoV: eq. 5.11 at pixel centres as the thesis writes it (its weights sum to 1 - O(1/R²)),
   // instead of the default, eq. 5.11 integrated over each pixel (weights sum to exactly 1).
   bool dov_midpoint_weights = false;
+  // DoV: where the cube maps come from (the result differs from exact's only within the
+  // tolerance DovEngine/DovCubesAgainstExact states; the mode is part of a run's identity).
+  DovCubes dov_cubes = DovCubes::kRays;
   // Conservative: how many times each cell is refined (halved along its long axes) for
   // occluder shrinking; more levels hide more and cost more (docs/conservative-visibility.md).
   int refine_levels = 3;

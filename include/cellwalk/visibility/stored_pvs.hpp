@@ -21,7 +21,7 @@ inline constexpr const char* kCellsSection = "cells";
 inline constexpr const char* kPvsSection = "pvs";
 inline constexpr const char* kDovSection = "dov";
 
-// The sets of one run, by cell (solid and not-yet-computed cells absent).
+// The sets of one run, by cell (solid, skipped and not-yet-computed cells absent).
 using CellSets = std::map<CellId, VisibleSet>;
 
 struct PvsRun {
@@ -49,7 +49,8 @@ struct PvsSizes {
 
 // Writes `out`: every section of `world` except old visibility sections, then "cells", "pvs"
 // and, if the sets carry DoVs, "dov". Atomic: nothing appears at `out` until it is complete, so
-// `out` may be the world's own path. REQUIRES: every non-solid cell has a set.
+// `out` may be the world's own path. REQUIRES: every cell that is neither solid nor skipped
+// has a set.
 PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
                               const CellSets& sets, const PvsRun& run);
 
@@ -63,7 +64,8 @@ class StoredPvs {
   const std::string& engine() const { return engine_; }
   bool conservative() const { return conservative_; }
   bool has_dov() const { return !dov_.empty(); }
-  // The set of a cell (with DoVs when stored); nullopt for solid cells.
+  // The set of a cell (with DoVs when stored); nullopt for solid cells. Throws Error for a
+  // skipped cell (no set was computed: callers check partition().cell(c).skipped first).
   std::optional<VisibleSet> set(CellId cell) const;
 
  private:

@@ -22,6 +22,11 @@ struct ViewCell {
   Aabb box;
   uint32_t depth = 0;   // 0 for grid cells; the subdivision depth in octrees and k-d trees
   bool solid = false;   // inside an object: no viewer can stand here, no set is computed
+  // Left out of the run (`pvs --along`): a viewer may stand here, but no set was computed, so
+  // none may be assumed (neither empty nor a neighbour's).
+  bool skipped = false;
+  // Whether the cell has a set: neither solid nor skipped.
+  bool computed() const { return !solid && !skipped; }
 };
 
 // Thread-safety: const methods may be called concurrently.
@@ -94,6 +99,15 @@ std::unique_ptr<ViewCellPartition> make_octree_partition(const CellRegion& regio
 // middle, while the cell is longer than viewcell_size along some axis. Leaves are the cells.
 std::unique_ptr<ViewCellPartition> make_kd_partition(const CellRegion& region, float viewcell_size,
                                                      const SolidTest& solid = {});
+
+// A copy of `partition` in which every non-solid cell that `keep` rejects is marked skipped
+// (ids, boxes and neighbours unchanged). Throws Error for a partition cellwalk did not make.
+std::unique_ptr<ViewCellPartition> skip_cells(const ViewCellPartition& partition,
+                                              const std::function<bool(const ViewCell&)>& keep);
+
+// Throws the Error a run-time system gives when its camera at `p` stands in a skipped cell:
+// it has no set to use, and it says how to compute one.
+[[noreturn]] void fail_in_skipped_cell(const std::string& system, const ViewCell& cell, const Vec3& p);
 
 // The "cells" section of a world file (layout in docs/format.md, "Visibility sections"), and
 // back. Reading checks every field and throws Error naming `where` on damage.

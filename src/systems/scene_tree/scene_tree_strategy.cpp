@@ -71,6 +71,7 @@ std::string SceneTreeStrategy::name() const {
 
 void SceneTreeStrategy::follow_cell(const Vec3& position) {
   const std::optional<CellId> cell = dov_->partition().locate(position);
+  if (cell && dov_->partition().cell(*cell).skipped) fail_in_skipped_cell(name(), dov_->partition().cell(*cell), position);
   if (cell && cell != cell_) {
     const std::optional<VisibleSet> set = dov_->set(*cell);
     if (set) {  // a solid cell has none: keep the last

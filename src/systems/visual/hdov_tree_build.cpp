@@ -145,7 +145,9 @@ HdovTreeBuild build_hdov_tree(const World& world, const ViewCellPartition& cells
   tree.vd.resize(tree.cell_count);
   for (CellId c = 0; c < tree.cell_count; ++c) {
     std::fill(dov_of.begin(), dov_of.end(), 0.0f);
-    if (const std::optional<VisibleSet> set = dov(c)) {
+    // A skipped cell's V-data stay empty; its flag travels in the tree's cells, so a walk that
+    // enters it is refused rather than shown nothing.
+    if (const std::optional<VisibleSet> set = cells.cell(c).skipped ? std::nullopt : dov(c)) {
       if (set->dov.size() != set->objects.size())
         fail("HDoV-tree build", "cell " + std::to_string(c) + "'s visible set has no DoVs (compute it with the dov engine)");
       for (size_t i = 0; i < set->objects.size(); ++i) {

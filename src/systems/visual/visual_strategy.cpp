@@ -110,7 +110,9 @@ void VisualStrategy::select(const Camera& camera, std::vector<DrawItem>& items, 
   Impl& m = *impl_;
   const std::optional<CellId> cell = m.tree->cells().locate(camera.position);
   // Outside the cells (or in a solid one) the last cell's result stays: VISUAL works only
-  // inside precomputed cells (thesis §5.8.5, digest §6).
+  // inside precomputed cells (thesis §5.8.5, digest §6). A skipped cell has no DoVs at all:
+  // keeping the last cell's would silently show the wrong objects.
+  if (cell && m.tree->cells().cell(*cell).skipped) fail_in_skipped_cell(name(), m.tree->cells().cell(*cell), camera.position);
   if (cell && !m.tree->cells().cell(*cell).solid && cell != m.searcher->cell()) m.query(*cell, stats);
   items.clear();
   for (const HdovPick& p : m.picks) {

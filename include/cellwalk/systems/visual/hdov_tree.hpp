@@ -77,7 +77,8 @@ struct HdovTreeBuild {
   uint64_t visible_nodes() const;      // Σ over cells of N_vnode(cell)
 };
 
-// The DoVs of one cell's visible objects (nullopt: a solid cell, nothing visible).
+// The DoVs of one cell's visible objects (nullopt: a solid cell, nothing visible). Not called for
+// skipped cells.
 using CellDovSource = std::function<std::optional<VisibleSet>(CellId)>;
 
 // Builds the tree over `world`'s objects: the R-tree, renumbered depth first; internal LODs
