@@ -79,8 +79,10 @@ TEST(ProcessBudget, EveryStrategyHoldsTheProcessWithinBudgetAndBaseline) {
       EXPECT_LE(field(m, "peak_gpu_bytes"), field(m, "gpu_budget_bytes"));
       EXPECT_GT(baseline, 0u);
       EXPECT_NEAR(double(peak), double(m.outside), 2.0 * 1048576.0);
-      EXPECT_LE(peak, budget + baseline);
-      EXPECT_LE(m.outside, budget + baseline);
+      if (!test::kUnderAddressSanitizer) {  // ASan's quarantine keeps freed memory resident
+        EXPECT_LE(peak, budget + baseline);
+        EXPECT_LE(m.outside, budget + baseline);
+      }
       std::printf("%-22s %d²: process peak %.1f MiB = baseline %.1f + %.1f MiB (budget %.1f)\n", strategy.c_str(),
                   side, double(m.outside) / 1048576.0, double(baseline) / 1048576.0,
                   (double(m.outside) - double(baseline)) / 1048576.0, kBudgetMib);

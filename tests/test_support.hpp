@@ -8,6 +8,21 @@
 
 namespace cellwalk::test {
 
+// True in a build under AddressSanitizer, whose allocator quarantines freed memory: resident
+// bytes then say nothing about what the code holds, so tests of RSS bounds skip them.
+constexpr bool kUnderAddressSanitizer =
+#if defined(__SANITIZE_ADDRESS__)
+    true;
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+    true;
+#else
+    false;
+#endif
+#else
+    false;
+#endif
+
 // A path under the source tree, e.g. source_path("tests/data/broken/empty.off").
 std::string source_path(const std::string& relative);
 // A mesh from the CGAL archive unpacked by scripts/setup, e.g. cgal_mesh("bunny00.off").
