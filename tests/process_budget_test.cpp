@@ -78,8 +78,9 @@ TEST(ProcessBudget, EveryStrategyHoldsTheProcessWithinBudgetAndBaseline) {
       EXPECT_LE(field(m, "peak_resident_bytes"), part);
       EXPECT_LE(field(m, "peak_gpu_bytes"), field(m, "gpu_budget_bytes"));
       EXPECT_GT(baseline, 0u);
-      EXPECT_NEAR(double(peak), double(m.outside), 2.0 * 1048576.0);
-      if (!test::kUnderAddressSanitizer) {  // ASan's quarantine keeps freed memory resident
+      EXPECT_LE(double(peak), double(m.outside) + 1048576.0) << "the kernel sees the whole life of the process";
+      if (!test::kUnderAddressSanitizer) {  // ASan's quarantine and exit-time leak check keep more resident
+        EXPECT_NEAR(double(peak), double(m.outside), 2.0 * 1048576.0);
         EXPECT_LE(peak, budget + baseline);
         EXPECT_LE(m.outside, budget + baseline);
       }

@@ -49,7 +49,7 @@ class ViewerTest : public ::testing::Test {
     scene_ = test::write_street_world(dir_, 30);
   }
   test::CommandResult view(const std::string& args) {
-    const std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(CELLWALK_BINARY) +
+    const std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + test::cellwalk_binary() +
                                 " view " + scene_ + " --width 320 --height 240 " + args + " 2>&1";
     test::CommandResult r;
     FILE* pipe = popen(command.c_str(), "r");
@@ -102,7 +102,7 @@ TEST_F(ViewerTest, ReplayedPathIsRecordedBackFaithfully) {
 }
 
 TEST_F(ViewerTest, NoDisplayGivesAClearError) {
-  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(CELLWALK_BINARY) + " view " +
+  const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY " + test::cellwalk_binary() + " view " +
                               scene_ + " --frames 1 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   std::string output;

@@ -186,7 +186,7 @@ TEST_F(BuiltWorld, TruncatedOrWrongVersionIsRejectedClearly) {
 TEST_F(BuiltWorld, FailedBuildLeavesThePreviousWorldIntact) {
   const auto before = slurp(world_);
   // A file-size limit makes writes fail as a full disk would (SIGXFSZ ignored: write returns EFBIG).
-  const std::string command = "bash -c \"trap '' XFSZ; ulimit -f 8; exec " + std::string(CELLWALK_BINARY) +
+  const std::string command = "bash -c \"trap '' XFSZ; ulimit -f 8; exec " + test::cellwalk_binary() +
                               " build " + scene_ + " -o " + world_ + "\" 2>&1";
   FILE* pipe = popen(command.c_str(), "r");
   std::string output;
