@@ -118,9 +118,12 @@ struct Worlds {
 };
 
 // A few eye-height cells spread over a world: 20 m cells in the city, 0.4 m ones among the bunnies.
+// `count` cells spread over a grid over the geometry alone (not the navigation graph beyond it),
+// so they lie among the objects.
 std::vector<ViewCell> cells_of(const World& world, float size, uint64_t count) {
-  const auto partition =
-      make_grid_partition(default_cell_region(world.info().bounds, world.info().nav, true), size);
+  CellRegion region = default_cell_region(world.info().bounds, world.info().nav, true);
+  region.bounds = world.info().bounds;
+  const auto partition = make_grid_partition(region, size);
   std::vector<ViewCell> out;
   const uint64_t n = partition->cell_count();
   for (uint64_t i = 0; i < count; ++i) out.push_back(partition->cell(CellId((2 * i + 1) * n / (2 * count))));

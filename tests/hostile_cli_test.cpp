@@ -299,5 +299,14 @@ TEST_F(HostileCli, BudgetRefusalsDoNotRoundToZero) {
   EXPECT_EQ(out.find(" 0 MiB"), std::string::npos) << out;
 }
 
+// An unknown strategy name recursed without end (a stack overflow) instead of naming the
+// strategies there are.
+TEST_F(HostileCli, UnknownStrategyIsNamedWithTheStrategiesThereAre) {
+  test::TempDir dir;
+  for (const std::string command : {"walk", "compare"})
+    refused(command + " " + world_ + " --path " + path_ + " -o " + dir.file(command) + " --strategy no-such",
+            {"no-such", "brute", "visual"});
+}
+
 }  // namespace
 }  // namespace cellwalk

@@ -27,6 +27,8 @@ struct Args {
   uint64_t check = 0, dov_compare = 0;
   int gt_points = 16, gt_resolution = 1024, threads = 0;
   EngineOptions options;
+  double lod_height = 480, lod_fov = 60, lod_aspect = 4.0 / 3.0;
+  bool faithful_bound = false;
   bool json = false;
 };
 
@@ -244,6 +246,11 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str()->check(integer_in(0, 10000));
   cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str()->check(integer_in(0, 8));
+  cmd->add_option("--lod-height", a->lod_height, "vLOD: image height in pixels the levels are chosen for (a walk may use this or less)")->capture_default_str()->check(number_in(16, 8192));
+  cmd->add_option("--lod-fov", a->lod_fov, "vLOD: vertical field of view, degrees, the levels are chosen for")->capture_default_str()->check(number_in(1, 170));
+  cmd->add_option("--lod-aspect", a->lod_aspect, "vLOD: image width / height the levels are chosen for")->capture_default_str()->check(number_in(0.05, 20));
+  cmd->add_option("--pixel-error", a->options.lod_rule.pixel_error, "vLOD: the worst screen error of a level from anywhere in its cell, pixels")->capture_default_str()->check(number_in(0.01, 1000));
+  cmd->add_flag("--faithful-bound", a->faithful_bound, "vLOD: the seed's text of the per-cell bound (§2.2), not a bound; to reproduce the paper only");
   cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str()->check(integer_in(4, 4096));
   cmd->add_option("--dov-cubes", a->dov_cubes, "DoV: cube maps by " + dov_modes + " (exact: GL at level 0, the reference)")->capture_default_str();
   cmd->add_option("--dov-compare", a->dov_compare, "DoV: time exact against --dov-cubes on this many cells, interleaved, and print how far their DoVs differ; write nothing")->check(integer_in(0, 100000));
@@ -252,6 +259,8 @@ void register_pvs(CLI::App& root) {
   cmd->add_flag("--json", a->json, "Print the report as JSON");
   cmd->callback([a] {
     a->options.dov_cubes = parse_dov_cubes(a->dov_cubes);
+    a->options.lod_rule.lens = Lens{float(a->lod_fov / 57.29577951308232), float(a->lod_aspect), float(a->lod_height)};
+    if (a->faithful_bound) a->options.lod_rule.formula = CellBoundFormula::kFaithful;
     if (a->dov_compare > 0 && a->engine != "dov")
       fail("pvs --dov-compare", "compares the dov engine's cube-map modes; give --engine dov");
     const World world(a->world);

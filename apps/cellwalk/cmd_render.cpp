@@ -47,7 +47,9 @@ void register_render(CLI::App& root) {
       camera.far_plane = 4.0f * span;
       camera.near_plane = span * 1e-4f;
     }
-    auto strategy = make_strategy(args->strategy, world, {});
+    StrategyOptions options;
+    options.viewport_height_px = float(args->lens.height);
+    auto strategy = make_strategy(args->strategy, world, options);
     auto context = GlContext::headless();
     Renderer renderer(args->lens.render_settings());
     FrameStats stats = render_frame(*strategy, renderer, camera);

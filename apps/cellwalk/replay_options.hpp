@@ -90,6 +90,7 @@ struct ReplayOptions {
   StrategyOptions strategy_options(const RunBudget& budget) const {
     StrategyOptions options;
     options.memory_budget_bytes = budget.strategy_bytes;
+    options.viewport_height_px = float(lens.height);
     options.eta = eta;
     options.polygon_budget = polygon_budget;
     options.dov_levels = !no_dov_levels;

@@ -108,6 +108,11 @@ bool too_small(const Aabb& box, const Vec3& eye, int resolution) {
   return glm::length(box.size()) < distance * 0.6 / resolution;
 }
 
+// The box less `margin` on every side (empty when it is not wider than 2 · margin).
+Aabb eroded(const Aabb& box, float margin) {
+  return margin > 0.0f ? Aabb{box.min + Vec3(margin), box.max - Vec3(margin)} : box;
+}
+
 double volume(const Aabb& b) {
   const Vec3 s = glm::max(b.size(), Vec3(0.0f));
   return double(s.x) * s.y * s.z;
@@ -151,18 +156,18 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   VisibleSet compute(const ViewCell& cell) const override {
     VisibleSet out;
     if (cell.solid) return out;
-    std::vector<uint8_t> visible(occludees_.size(), 0);
+    Pass pass{cell.box, std::vector<uint8_t>(occludees_.size(), 0), {},
+               std::vector<float>(params_.occluder_margin ? occludees_.size() : 0, -1.0f)};
     std::vector<ObjectId> candidates;
     for (ObjectId id = 0; id < occludees_.size(); ++id) {
       if (occludees_[id].overlaps(cell.box))
-        visible[id] = 1;  // around a viewpoint: nothing can hide it
+        pass.visible[id] = 1;  // around a viewpoint: nothing can hide it
       else
         candidates.push_back(id);
     }
-    Buffers buffers;
-    refine(cell.box, 0, std::move(candidates), visible, buffers);
+    refine(cell.box, 0, std::move(candidates), pass);
     for (ObjectId id = 0; id < occludees_.size(); ++id)
-      if (visible[id]) out.objects.push_back(id);
+      if (pass.visible[id]) out.objects.push_back(id);
     return out;
   }
 
@@ -179,6 +184,26 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   // depth first, so a level's buffer is done with before the next box of that level.
   using Buffers = std::vector<std::unique_ptr<CubeDepthBuffer>>;
 
+  // One compute(): the cell, what is visible so far, the buffers, and each object's occluder
+  // margin from the cell (-1 until asked for; empty without ConservativeParams::occluder_margin).
+  struct Pass {
+    Aabb cell;
+    std::vector<uint8_t> visible;
+    Buffers buffers;
+    std::vector<float> margin;
+  };
+
+  float margin_of(ObjectId id, Pass& pass) const {
+    if (pass.margin.empty()) return 0.0f;
+    if (pass.margin[id] < 0.0f) pass.margin[id] = std::max(0.0f, params_.occluder_margin(pass.cell, id));
+    return pass.margin[id];
+  }
+
+  // The occluder as the levels drawn from the cell hold it (ConservativeParams::occluder_margin).
+  Aabb drawn(const Occluder& o, const Aabb& shape, Pass& pass) const {
+    return eroded(shape, std::max(margin_of(o.object, pass), margin_of(o.other, pass)));
+  }
+
   CubeDepthBuffer& buffer_for(Buffers& buffers, size_t level, const Vec3& eye) const {
     if (buffers.size() <= level) buffers.resize(level + 1);
     if (!buffers[level])
@@ -191,19 +216,18 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   // Tests the candidates from `box`; those not hidden from it are visible when the box is a
   // leaf of the refinement, else they are tested from each child, minus those an earlier
   // child already showed to be visible.
-  void refine(const Aabb& box, int level, std::vector<ObjectId> candidates, std::vector<uint8_t>& visible,
-              Buffers& buffers) const {
-    std::erase_if(candidates, [&](ObjectId id) { return visible[id] != 0; });
+  void refine(const Aabb& box, int level, std::vector<ObjectId> candidates, Pass& pass) const {
+    std::erase_if(candidates, [&](ObjectId id) { return pass.visible[id] != 0; });
     if (candidates.empty()) return;
-    CubeDepthBuffer& depth = buffer_for(buffers, size_t(level), box.center());
+    CubeDepthBuffer& depth = buffer_for(pass.buffers, size_t(level), box.center());
     for (ObjectId id : candidates) depth.demand(occludees_[id]);
-    if (params_.occluder_shrinking) render_occluders(box, depth);
-    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth); });
+    if (params_.occluder_shrinking) render_occluders(box, depth, pass);
+    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth, pass); });
     if (level >= params_.refine_levels) {
-      for (ObjectId id : candidates) visible[id] = 1;
+      for (ObjectId id : candidates) pass.visible[id] = 1;
       return;
     }
-    for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, visible, buffers);
+    for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, pass);
   }
 
   // Viewpoints must lie outside the occluder's solid for its crossing argument.
@@ -215,14 +239,14 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   // occluders that can lower no wanted pixel (behind what is already rendered, or outside
   // every candidate's projection) are skipped whole: the buffer is the same as rendering all
   // (each pixel keeps the minimum), only cheaper.
-  void render_occluders(const Aabb& box, CubeDepthBuffer& depth) const {
+  void render_occluders(const Aabb& box, CubeDepthBuffer& depth, Pass& pass) const {
     const bool above_floor = box.min.y >= floor_;
     tree_->front_to_back(
         box, [&](const Aabb& group) { return depth.may_lower(group); },
         [&](uint32_t i) {
           const Occluder& o = occluders_[i];
-          const Aabb& shape = above_floor ? o.grounded : o.box;
-          if (usable(o, box) && !too_small(shape, box.center(), params_.face_resolution) && depth.may_lower(shape))
+          const Aabb shape = drawn(o, above_floor ? o.grounded : o.box, pass);
+          if (!shape.empty() && usable(o, box) && !too_small(shape, box.center(), params_.face_resolution) && depth.may_lower(shape))
             render_shrunk(shape, box, depth);
         });
   }
@@ -236,15 +260,15 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     depth.add_occluder_for_cell(occluder, cell.size() * 0.5f);
   }
 
-  bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth) const {
+  bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth, Pass& pass) const {
     const Aabb& box = occludees_[id];
     if (params_.occluder_shrinking && depth.hidden(box)) return true;
-    return params_.corner_test && corner_test_hides(id, cell);
+    return params_.corner_test && corner_test_hides(id, cell, pass);
   }
 
   // HDoV §5.5.1 with each usable occluder within corner_test_radius of the cell whose box the
   // centre-to-centre segment meets (a cheap necessary condition), found through the tree.
-  bool corner_test_hides(ObjectId id, const Aabb& cell) const {
+  bool corner_test_hides(ObjectId id, const Aabb& cell, Pass& pass) const {
     const Aabb& box = occludees_[id];
     const Vec3 eye = cell.center(), target = box.center();
     const visibility::SegmentFilter segment(eye, target);
@@ -256,9 +280,12 @@ class ConservativeEngineImpl final : public VisibilityEngine {
         },
         [&](uint32_t i) {
           const Occluder& o = occluders_[i];
-          found = found || (o.object != id && o.other != id && distance_between(o.box, cell) <= params_.corner_test_radius &&
-                            usable(o, cell) && visibility::segment_meets_box(eye, target, o.box) &&
-                            visibility::occluder_hides(cell, o.box, box));
+          if (found || o.object == id || o.other == id || distance_between(o.box, cell) > params_.corner_test_radius ||
+              !usable(o, cell))
+            return;
+          const Aabb shape = drawn(o, o.box, pass);
+          found = !shape.empty() && visibility::segment_meets_box(eye, target, shape) &&
+                  visibility::occluder_hides(cell, shape, box);
         });
     return found;
   }

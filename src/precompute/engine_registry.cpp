@@ -31,6 +31,28 @@ class DovWithPrior : public VisibilityEngine {
   visibility::DovEngine dov_;
 };
 
+// vLOD(C) (seed 001 §2.3): the objects not proven hidden from the cell when every occluder is
+// the level the cell draws of it (§4). Its name carries the level rule, so the stored sets say
+// which levels the run time must draw and a run with another rule is another run.
+class VlodEngine : public VisibilityEngine {
+ public:
+  VlodEngine(const World& world, const EngineOptions& options) : rule_(options.lod_rule) {
+    ConservativeParams params;
+    params.refine_levels = options.refine_levels;
+    params.occluder_margin = [&world, rule = rule_](const Aabb& cell, ObjectId id) {
+      return world.lod(id, visibility::cell_level(world, id, cell, rule)).error;
+    };
+    inner_ = make_conservative_engine(world, params);
+  }
+  std::string name() const override { return "vlod:" + visibility::to_string(rule_); }
+  bool conservative() const override { return true; }
+  VisibleSet compute(const ViewCell& cell) const override { return inner_->compute(cell); }
+
+ private:
+  visibility::CellLodRule rule_;
+  std::unique_ptr<VisibilityEngine> inner_;
+};
+
 constexpr std::array<std::pair<DovCubes, const char*>, 2> kDovCubes = {{{DovCubes::kRays, "rays"}, {DovCubes::kExact, "exact"}}};
 
 std::string listed(const std::vector<std::string>& names) {
@@ -59,7 +81,7 @@ DovCubes parse_dov_cubes(const std::string& name) {
   fail("--dov-cubes '" + name + "'", "unknown cube-map mode; the modes are " + listed(dov_cubes_names()));
 }
 
-std::vector<std::string> engine_names() { return {"sampling", "dov", "conservative"}; }
+std::vector<std::string> engine_names() { return {"sampling", "dov", "conservative", "vlod"}; }
 
 std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const World& world,
                                               const EngineOptions& options) {
@@ -70,6 +92,7 @@ std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const Wor
     params.refine_levels = options.refine_levels;
     return make_conservative_engine(world, params);
   }
+  if (name == "vlod") return std::make_unique<VlodEngine>(world, options);
   fail("visibility engine '" + name + "'", "unknown; the engines are " + listed(engine_names()));
 }
 

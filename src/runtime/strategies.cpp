@@ -3,6 +3,7 @@
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/systems/visual/visual_strategy.hpp"
 #include "cellwalk/systems/review/review.hpp"
+#include "cellwalk/systems/vlod/vlod_strategy.hpp"
 #include "cellwalk/strategy/strategy.hpp"
 #include "systems/brute/brute.hpp"
 #include "systems/scene_tree/scene_tree_strategy.hpp"
@@ -10,13 +11,16 @@
 namespace cellwalk {
 
 std::vector<std::string> strategy_names() {
-  return {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]"};
+  return {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]",
+          "vlod[:key=value,...]"};
 }
 
 namespace {
 
 [[noreturn]] void unknown_strategy(const std::string& name) {
-  unknown_strategy(name);
+  std::string known;
+  for (const auto& n : strategy_names()) known += (known.empty() ? "" : ", ") + n;
+  fail("strategy \"" + name + "\"", "unknown; choose one of " + known);
 }
 
 }  // namespace
@@ -26,6 +30,7 @@ void check_strategy_name(const std::string& name) {
     if (name == plain) return;
   if (is_review_strategy_name(name)) return void(parse_review_strategy_name(name));
   if (is_visual_strategy_name(name)) return void(parse_visual_strategy_name(name));
+  if (is_vlod_strategy_name(name)) return void(parse_vlod_strategy_name(name));
   unknown_strategy(name);
 }
 
@@ -37,6 +42,7 @@ std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& wo
   if (name == "hdov-vsc") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kVsc);
   if (is_review_strategy_name(name)) return std::make_unique<ReviewStrategy>(world, parse_review_strategy_name(name), options);
   if (is_visual_strategy_name(name)) return std::make_unique<VisualStrategy>(world, parse_visual_strategy_name(name), options);
+  if (is_vlod_strategy_name(name)) return std::make_unique<VlodStrategy>(world, parse_vlod_strategy_name(name), options);
   if (name == "hdov-pb") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kPb);
   unknown_strategy(name);
 }

@@ -28,9 +28,10 @@ uint64_t largest_load(const World& world) {
 
 // The cache's own limit leaves room for one load in flight, so what is cached plus what is
 // being read and decoded never passes the caller's budget.
-GeometryStore::GeometryStore(const World& world, uint64_t budget_bytes, std::unique_ptr<ReplacementPolicy> policy)
+GeometryStore::GeometryStore(const World& world, uint64_t budget_bytes, std::unique_ptr<ReplacementPolicy> policy,
+                             unsigned loads_in_flight)
     : world_(world),
-      load_headroom_(largest_load(world)),
+      load_headroom_(largest_load(world) * std::max(1u, loads_in_flight)),
       budget_(budget_bytes == 0 ? 0 : budget_bytes > load_headroom_ ? budget_bytes - load_headroom_ : 1),
       directory_bytes_(world.resident_bytes()) {
   if (budget_bytes != 0 && budget_bytes < directory_bytes_ + load_headroom_)
@@ -47,21 +48,47 @@ GeometryStore::~GeometryStore() {
   budget_.release(directory_bytes_);
 }
 
-std::shared_ptr<const Mesh> GeometryStore::get(ObjectId id, uint32_t level, const EntryMeta& meta, FetchStats& stats) {
-  ItemLoader loader = [&]() -> LoadedItem {
-    Stopwatch watch;
-    auto bytes = world_.read_level(id, level);
-    stats.io_ms += watch.lap_ms();
-    stats.bytes_read += bytes.size();
-    auto mesh = std::make_shared<const Mesh>(world_.decode_level(id, level, bytes));
-    stats.decode_ms += watch.lap_ms();
-    const uint64_t mesh_bytes = sizeof(Mesh) + mesh->byte_size();
-    if (mesh_bytes > decoded_bound(mesh->triangle_count()))
-      fail(world_.file().path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
-           "decodes to unreferenced vertices (the file is damaged)");
-    peak_ = std::max(peak_, budget_.used() + bytes.size() + mesh_bytes);
-    return {mesh, mesh_bytes};
+void GeometryStore::raise_peak(uint64_t bytes) {
+  for (uint64_t seen = peak_.load(); bytes > seen && !peak_.compare_exchange_weak(seen, bytes);) {
+  }
+}
+
+// The peak counts the load's encoded and decoded bytes beside what the budget holds; with
+// loads on two threads each counts itself, and the budget keeps room for both.
+LoadedItem GeometryStore::load(ObjectId id, uint32_t level, FetchStats& stats) {
+  Stopwatch watch;
+  auto bytes = world_.read_level(id, level);
+  stats.io_ms += watch.lap_ms();
+  stats.bytes_read += bytes.size();
+  auto mesh = std::make_shared<const Mesh>(world_.decode_level(id, level, bytes));
+  stats.decode_ms += watch.lap_ms();
+  const uint64_t mesh_bytes = sizeof(Mesh) + mesh->byte_size();
+  if (mesh_bytes > decoded_bound(mesh->triangle_count()))
+    fail(world_.file().path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
+         "decodes to unreferenced vertices (the file is damaged)");
+  raise_peak(budget_.used() + bytes.size() + mesh_bytes);
+  return {mesh, mesh_bytes};
+}
+
+ItemLoader GeometryStore::loader(ObjectId id, uint32_t level) {
+  return [this, id, level]() -> LoadedItem {
+    FetchStats stats;
+    LoadedItem item = load(id, level, stats);
+    std::lock_guard lock(prefetched_mutex_);
+    prefetched_.io_ms += stats.io_ms;
+    prefetched_.decode_ms += stats.decode_ms;
+    prefetched_.bytes_read += stats.bytes_read;
+    return item;
   };
+}
+
+FetchStats GeometryStore::prefetched() const {
+  std::lock_guard lock(prefetched_mutex_);
+  return prefetched_;
+}
+
+std::shared_ptr<const Mesh> GeometryStore::get(ObjectId id, uint32_t level, const EntryMeta& meta, FetchStats& stats) {
+  ItemLoader loader = [&]() -> LoadedItem { return load(id, level, stats); };
   CacheResult r = buffer_->get(key(id, level), meta, loader);
   (r.hit ? stats.cache_hits : stats.cache_misses) += 1;
   auto mesh = BufferManager::get_as<Mesh>(r);
@@ -69,7 +96,7 @@ std::shared_ptr<const Mesh> GeometryStore::get(ObjectId id, uint32_t level, cons
     transient_ = mesh;
     transient_bytes_ = sizeof(Mesh) + mesh->byte_size();
   }
-  peak_ = std::max(peak_, resident_bytes());
+  raise_peak(resident_bytes());
   return mesh;
 }
 

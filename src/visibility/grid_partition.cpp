@@ -15,6 +15,12 @@ CellRegion default_cell_region(const Aabb& bounds, const NavGraph& nav, bool two
     }
     region.eye_min -= 0.25f;
     region.eye_max += 0.25f;
+    // Cells cover where a viewer can go, not only the geometry: a street or a path past the
+    // last object still has sets (paths run along the graph's edges, within a metre of them).
+    for (const Vec3& n : nav.nodes) {
+      region.bounds.min = glm::min(region.bounds.min, n - Vec3(1.0f));
+      region.bounds.max = glm::max(region.bounds.max, n + Vec3(1.0f));
+    }
   }
   return region;
 }

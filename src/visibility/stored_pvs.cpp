@@ -181,6 +181,11 @@ std::vector<ObjectId> StoredPvs::decode(CellId cell, int depth) const {
   return ids;
 }
 
+uint64_t StoredPvs::resident_bytes() const {
+  return pvs_.size() + dov_.size() + (offsets_.size() + dov_offsets_.size()) * sizeof(uint64_t) +
+         partition_->cell_count() * (sizeof(ViewCell) + 6 * sizeof(CellId));  // boxes and neighbour lists
+}
+
 std::optional<VisibleSet> StoredPvs::set(CellId cell) const {
   const std::span<const uint8_t> rec = record(cell);
   if (partition_->cell(cell).skipped)

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 
 #include "cellwalk/precompute/engine.hpp"
@@ -46,6 +47,11 @@ struct ConservativeParams {
   double corner_test_radius = 200.0;
   // Threads deriving the occluders when the engine is made; 0 = all cores.
   int threads = 0;
+  // vLOD §4: visibility computed on the levels drawn from the cell. The occluder boxes are
+  // inscribed in level 0; a level whose surface lies within e of level 0 still holds each box
+  // eroded by e, so every box of `object` is eroded by occluder_margin(cell, object) metres
+  // (the error of the level drawn from that cell) before it hides anything. Empty: 0 (level 0).
+  std::function<float(const Aabb& cell, ObjectId object)> occluder_margin;
 };
 
 // What the engine derived from the world, for reports.

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/visibility/cell_lod.hpp"
 #include "cellwalk/visibility/view_cell.hpp"
 #include "cellwalk/visibility/visibility.hpp"
 
@@ -57,6 +58,8 @@ struct EngineOptions {
   // Conservative: how many times each cell is refined (halved along its long axes) for
   // occluder shrinking; more levels hide more and cost more (docs/conservative-visibility.md).
   int refine_levels = 3;
+  // vLOD: the levels drawn from each cell (vLOD §2.2), on which its visibility is computed.
+  visibility::CellLodRule lod_rule;
 };
 
 // Names accepted by make_engine(), e.g. {"sampling", "dov"}.

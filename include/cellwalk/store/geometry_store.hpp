@@ -3,8 +3,10 @@
 // The world's directory is reserved in the same budget for as long as the store lives.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 
 #include "cellwalk/store/buffer_manager.hpp"
 #include "cellwalk/store/fetch_stats.hpp"
@@ -17,9 +19,10 @@ class GeometryStore {
   // budget_bytes 0 = unlimited; otherwise the directory, the cached meshes and the one level
   // being read and decoded stay within it together. Throws Error if the budget cannot hold the
   // directory plus the world's largest level.
-  // policy nullptr = LRU.
+  // policy nullptr = LRU. loads_in_flight: how many levels may be read and decoded at once
+  // (the budget keeps room for each): 1 for get() alone, 2 with a prefetching thread.
   GeometryStore(const World& world, uint64_t budget_bytes,
-                std::unique_ptr<ReplacementPolicy> policy = nullptr);
+                std::unique_ptr<ReplacementPolicy> policy = nullptr, unsigned loads_in_flight = 1);
   ~GeometryStore();
 
   // The decoded mesh of one level; reads and decodes on a miss, adding I/O and decode time,
@@ -28,11 +31,18 @@ class GeometryStore {
   // caller holds it.
   std::shared_ptr<const Mesh> get(ObjectId id, uint32_t level, const EntryMeta& meta, FetchStats& stats);
 
+  // What a Prefetcher over buffer() loads the level with: it reads and decodes as get() does,
+  // counting into prefetched(). REQUIRES: loads_in_flight >= 2 when it runs beside get().
+  // Thread-safe; the store must outlive every loader.
+  ItemLoader loader(ObjectId id, uint32_t level);
+  // The I/O, decode and bytes of the loads loader() made.
+  FetchStats prefetched() const;
+
   // Bytes held now: everything reserved in the budget plus uncached meshes still held.
   uint64_t resident_bytes() const;
   // The largest resident_bytes() seen at any get(), counting a load's encoded and decoded bytes
   // while it is in flight.
-  uint64_t peak_resident_bytes() const { return peak_; }
+  uint64_t peak_resident_bytes() const { return peak_.load(); }
   const MemoryBudget& budget() const { return budget_; }
   BufferManager& buffer() { return *buffer_; }
   const World& world() const { return world_; }
@@ -48,7 +58,12 @@ class GeometryStore {
   std::unique_ptr<BufferManager> buffer_;
   std::weak_ptr<const Mesh> transient_;  // the last uncached mesh handed out
   uint64_t transient_bytes_ = 0;
-  uint64_t peak_ = 0;
+  std::atomic<uint64_t> peak_{0};
+  mutable std::mutex prefetched_mutex_;
+  FetchStats prefetched_;
+
+  LoadedItem load(ObjectId id, uint32_t level, FetchStats& stats);
+  void raise_peak(uint64_t bytes);
 };
 
 }  // namespace cellwalk

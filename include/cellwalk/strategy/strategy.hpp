@@ -48,6 +48,9 @@ class Strategy {
 
 struct StrategyOptions {
   uint64_t memory_budget_bytes = 0;  // 0 = unbounded; never exceeded
+  // The height of the images drawn, pixels (0: unknown). vlod refuses images whose pixels
+  // would magnify its levels' error past the bound they were chosen for.
+  float viewport_height_px = 0.0f;
   // HDoV thesis η: the DoV threshold of the threshold searches (hdov-vsc; docs/scene-tree.md).
   double eta = 0.001;
   // hdov-pb: the polygon budget, triangles per frame (HDoV thesis §6.1.2).

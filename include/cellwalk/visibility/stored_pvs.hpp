@@ -67,6 +67,8 @@ class StoredPvs {
   // The set of a cell (with DoVs when stored); nullopt for solid cells. Throws Error for a
   // skipped cell (no set was computed: callers check partition().cell(c).skipped first).
   std::optional<VisibleSet> set(CellId cell) const;
+  // Bytes the reader holds: the sections as read, their offsets and the partition.
+  uint64_t resident_bytes() const;
 
  private:
   std::span<const uint8_t> record(CellId cell) const;

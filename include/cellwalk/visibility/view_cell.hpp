@@ -58,8 +58,8 @@ struct CellRegion {
   float eye_max = 1.95f;
 };
 
-// The default region of a world: its bounds in x/z, and in 2D the navigation graph's node
-// heights padded by 0.25 m (1.7 m ± 0.25 m when the graph is empty).
+// The default region of a world: its bounds and the navigation graph's nodes (padded by 1 m)
+// in x/z, and in 2D the nodes' heights padded by 0.25 m (1.7 m ± 0.25 m when the graph is empty).
 CellRegion default_cell_region(const Aabb& bounds, const NavGraph& nav, bool two_d);
 
 // Whether a cell box is inside solid matter (see EmbreeScene::box_is_solid). Cells it accepts

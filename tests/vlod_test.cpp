@@ -1,0 +1,187 @@
+// vLOD (seed 001): the per-cell level rule (§2.2), visibility on the levels drawn (§4), and the
+// strategy end to end: a walk that misses no visible object and draws coarser levels than brute.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/core/random.hpp"
+#include "cellwalk/precompute/conservative_visibility.hpp"
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/vlod/vlod_strategy.hpp"
+#include "cellwalk/visibility/cell_lod.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+using visibility::CellLodRule;
+
+nlohmann::json summary_of(const test::CommandResult& r) {
+  const size_t start = r.output.find('{');
+  return start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.output.substr(start), nullptr, false);
+}
+
+// A small city with real LOD chains, built once for the suite.
+class VlodCity : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir();
+    world_ = dir_->file("city.cww");
+    for (const std::string& command :
+         {"generate city --objects 60 --seed 5 -o " + dir_->file("city.cwscene"),
+          "build " + dir_->file("city.cwscene") + " -o " + world_})
+      ASSERT_EQ(test::run_cellwalk(command).exit_code, 0) << command;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static test::TempDir* dir_;
+  static std::string world_;
+};
+test::TempDir* VlodCity::dir_ = nullptr;
+std::string VlodCity::world_;
+
+// Against the oracle of the definition: the level chosen meets the bound over the cell, the
+// next coarser one does not, and an object the cell touches is drawn at level 0.
+TEST_F(VlodCity, CellLevelIsTheCoarsestWithinTheBound) {
+  const World world(world_);
+  CellLodRule rule;
+  rule.lens.viewport_height_px = 480;
+  Random rng(7);
+  const Aabb bounds = world.info().bounds;
+  uint64_t coarser = 0, touching = 0;
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 corner(float(rng.uniform(bounds.min.x, bounds.max.x)), 1.5f, float(rng.uniform(bounds.min.z, bounds.max.z)));
+    const Aabb cell{corner, corner + Vec3(4.0f, 0.5f, 4.0f)};
+    for (ObjectId id = 0; id < world.object_count(); ++id) {
+      const uint32_t level = visibility::cell_level(world, id, cell, rule);
+      const ObjectRecord& o = world.object(id);
+      ASSERT_LT(level, o.lod_count);
+      const float pixels = cell_pixels_per_unit(cell, o.bounds, rule.lens);
+      if (o.bounds.overlaps(cell)) {
+        EXPECT_EQ(level, 0u);
+        ++touching;
+        continue;
+      }
+      EXPECT_LT(world.lod(id, level).error * pixels, rule.pixel_error);
+      if (level + 1 < o.lod_count) {
+        EXPECT_GE(world.lod(id, level + 1).error * pixels, rule.pixel_error);
+      }
+      coarser += level > 0;
+    }
+  }
+  EXPECT_GT(coarser, 0u) << "no object was ever drawn coarser: the test shows nothing";
+  EXPECT_GT(touching + coarser, 0u);
+}
+
+TEST(CellLodRule, ReadsBackWhatItWritesAndRefusesTheRest) {
+  CellLodRule rule;
+  rule.pixel_error = 0.5f;
+  rule.lens = Lens{0.9f, 1.5f, 720.0f};
+  rule.formula = CellBoundFormula::kFaithful;
+  const CellLodRule back = visibility::parse_cell_lod_rule(visibility::to_string(rule), "test");
+  EXPECT_FLOAT_EQ(back.pixel_error, 0.5f);
+  EXPECT_NEAR(back.lens.fov_y_rad, 0.9f, 1e-4f);
+  EXPECT_FLOAT_EQ(back.lens.aspect, 1.5f);
+  EXPECT_FLOAT_EQ(back.lens.viewport_height_px, 720.0f);
+  EXPECT_EQ(back.formula, CellBoundFormula::kFaithful);
+  for (const char* bad : {"", "px=1", "px=-1,h=480,fov=60,aspect=1,formula=corrected",
+                          "px=1,h=480,fov=60,aspect=1,formula=other", "px=1,h=480,fov=60,aspect=1,formula=corrected,x=2"})
+    EXPECT_THROW(visibility::parse_cell_lod_rule(bad, "test"), Error) << bad;
+}
+
+// A smaller or narrower image magnifies less and keeps the bound; a taller or wider one does not.
+TEST(CellLodRule, CoversOnlyImagesThatMagnifyNoMore) {
+  CellLodRule rule;
+  rule.lens = Lens{1.0471976f, 4.0f / 3.0f, 480.0f};
+  EXPECT_TRUE(visibility::rule_covers(rule, rule.lens));
+  EXPECT_TRUE(visibility::rule_covers(rule, Lens{1.0471976f, 4.0f / 3.0f, 240.0f}));
+  EXPECT_FALSE(visibility::rule_covers(rule, Lens{1.0471976f, 4.0f / 3.0f, 960.0f}));
+  EXPECT_FALSE(visibility::rule_covers(rule, Lens{1.0471976f, 3.0f, 480.0f}));
+}
+
+// §4 through occluder_margin: a wall 3 m thick still hides the box behind it when its levels
+// may lie 1 m off, and hides nothing once they may lie 2 m off (the eroded box is empty).
+TEST(VlodVisibility, OccludersAreErodedByTheErrorOfTheLevelDrawn) {
+  test::TempDir dir;
+  std::vector<Object> objects;
+  for (const Aabb& b : {Aabb{Vec3(5, 0, -10), Vec3(8, 10, 10)}, Aabb{Vec3(12, 1, -0.5f), Vec3(13, 2, 0.5f)}}) {
+    Object o;
+    o.id = ObjectId(objects.size());
+    o.name = "box" + std::to_string(o.id);
+    o.mesh = test::box_mesh(b);
+    o.bounds = b;
+    objects.push_back(o);
+  }
+  const World world(test::write_world(dir, objects, NavGraph{}));
+  const ViewCell cell{0, Aabb{Vec3(-1, 1, -1), Vec3(1, 3, 1)}, 0, false};
+  auto visible = [&](float margin) {
+    ConservativeParams params;
+    params.occluder_margin = [margin](const Aabb&, ObjectId) { return margin; };
+    return make_conservative_engine(world, params)->compute(cell).objects;
+  };
+  EXPECT_EQ(visible(0.0f), std::vector<ObjectId>{0});
+  EXPECT_EQ(visible(1.0f), std::vector<ObjectId>{0});
+  EXPECT_EQ(visible(2.0f), (std::vector<ObjectId>{0, 1}));
+}
+
+// Eroding occluders can only reveal: on a street, every set with margins holds the set without.
+TEST(VlodVisibility, MarginsOnlyAddToTheSet) {
+  test::TempDir dir;
+  const World world(test::write_street_world(dir, 16));
+  Random rng(3);
+  uint64_t hidden_somewhere = 0;
+  for (int i = 0; i < 8; ++i) {
+    const float x = float(rng.uniform(-4, 40));
+    const ViewCell cell{0, Aabb{Vec3(x, 1.45f, -1.0f), Vec3(x + 2.0f, 1.95f, 1.0f)}, 0, false};
+    const std::vector<ObjectId> plain = make_conservative_engine(world, {})->compute(cell).objects;
+    ConservativeParams eroded;
+    eroded.occluder_margin = [&](const Aabb&, ObjectId id) { return float(id % 3) * 0.4f; };
+    const std::vector<ObjectId> more = make_conservative_engine(world, eroded)->compute(cell).objects;
+    EXPECT_TRUE(std::includes(more.begin(), more.end(), plain.begin(), plain.end())) << "cell at x = " << x;
+    hidden_somewhere += world.object_count() - plain.size();
+  }
+  EXPECT_GT(hidden_somewhere, 0u) << "nothing was ever hidden: the test shows nothing";
+}
+
+// End to end: `pvs --engine vlod`, then compare against ground truth: no visible object missed,
+// and the vLOD draws fewer triangles than brute on the same path.
+TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
+  const std::string path = dir_->file("p.path");
+  auto r = test::run_cellwalk("path " + world_ + " --frames 24 --seed 3 -o " + path);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  // Without vLOD sets the strategy says what to run.
+  r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy vlod --width 96 --height 72 -o " + dir_->file("w0"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--engine vlod"), std::string::npos) << r.output;
+  r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:40 --refine 1 --lod-height 72 --lod-aspect 1.3333334");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("compare " + world_ + " --path " + path + " --strategy vlod --every 2 --width 96 --height 72 --json -o " +
+                         dir_->file("cmp"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto fidelity = summary_of(r);
+  ASSERT_TRUE(fidelity.is_object()) << r.output;
+  EXPECT_GT(fidelity["visible_objects"].get<uint64_t>(), 0u);
+  EXPECT_EQ(fidelity["missed_objects"].get<uint64_t>(), 0u) << r.output;
+  uint64_t triangles[2] = {0, 0};
+  int k = 0;
+  for (const std::string strategy : {"brute", "vlod"}) {
+    r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy " + strategy +
+                           " --budget 48 --width 96 --height 72 --json -o " + dir_->file("walk-" + strategy));
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const auto j = summary_of(r);
+    ASSERT_TRUE(j.is_object()) << r.output;
+    EXPECT_LE(j["peak_resident_bytes"].get<uint64_t>(), j["strategy_budget_bytes"].get<uint64_t>()) << strategy;
+    triangles[k++] = j["total_triangles"].get<uint64_t>();
+  }
+  EXPECT_LT(triangles[1], triangles[0]);
+  // An image taller than the levels were chosen for would break their bound: refused.
+  r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy vlod --width 640 --height 480 -o " + dir_->file("w1"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("--lod-height"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace cellwalk
