@@ -308,5 +308,10 @@ TEST_F(HostileCli, UnknownStrategyIsNamedWithTheStrategiesThereAre) {
             {"no-such", "brute", "visual"});
 }
 
+// A vLOD option given to another engine was ignored without a word.
+TEST_F(HostileCli, VlodLevelOptionsNeedTheVlodEngine) {
+  refused("pvs " + world_ + " --engine sampling --lod-height 720", {"--lod-height", "--engine vlod"});
+}
+
 }  // namespace
 }  // namespace cellwalk

@@ -232,6 +232,7 @@ void register_pvs(CLI::App& root) {
   std::string dov_modes;
   for (const std::string& n : dov_cubes_names()) dov_modes += (dov_modes.empty() ? "" : "|") + n;
   cmd->add_option("world", a->world, "World file (.cww)")->required();
+  std::vector<CLI::Option*> vlod_options;
   cmd->add_option("--engine", a->engine, "Visibility engine: " + engines)->capture_default_str();
   cmd->add_option("--cells", a->cells, "View cells: grid:SIZE | grid3d:SIZE | kd:SIZE | octree[:ROOT[:THRESHOLD[:DEPTH]]]")->capture_default_str();
   auto* along = cmd->add_option("--along", a->along, "Compute only the cells near this camera path (cellwalk path); the others are stored as skipped, and a walk entering one is refused");
@@ -246,18 +247,21 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str()->check(integer_in(0, 10000));
   cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str()->check(integer_in(0, 8));
-  cmd->add_option("--lod-height", a->lod_height, "vLOD: image height in pixels the levels are chosen for (a walk may use this or less)")->capture_default_str()->check(number_in(16, 8192));
-  cmd->add_option("--lod-fov", a->lod_fov, "vLOD: vertical field of view, degrees, the levels are chosen for")->capture_default_str()->check(number_in(1, 170));
-  cmd->add_option("--lod-aspect", a->lod_aspect, "vLOD: image width / height the levels are chosen for")->capture_default_str()->check(number_in(0.05, 20));
-  cmd->add_option("--pixel-error", a->options.lod_rule.pixel_error, "vLOD: the worst screen error of a level from anywhere in its cell, pixels")->capture_default_str()->check(number_in(0.01, 1000));
-  cmd->add_flag("--faithful-bound", a->faithful_bound, "vLOD: the seed's text of the per-cell bound (§2.2), not a bound; to reproduce the paper only");
+  vlod_options.push_back(cmd->add_option("--lod-height", a->lod_height, "vLOD: image height in pixels the levels are chosen for (a walk may use this or less)")->capture_default_str()->check(number_in(16, 8192)));
+  vlod_options.push_back(cmd->add_option("--lod-fov", a->lod_fov, "vLOD: vertical field of view, degrees, the levels are chosen for")->capture_default_str()->check(number_in(1, 170)));
+  vlod_options.push_back(cmd->add_option("--lod-aspect", a->lod_aspect, "vLOD: image width / height the levels are chosen for")->capture_default_str()->check(number_in(0.05, 20)));
+  vlod_options.push_back(cmd->add_option("--pixel-error", a->options.lod_rule.pixel_error, "vLOD: the worst screen error of a level from anywhere in its cell, pixels")->capture_default_str()->check(number_in(0.01, 1000)));
+  vlod_options.push_back(cmd->add_flag("--faithful-bound", a->faithful_bound, "vLOD: the seed's text of the per-cell bound (§2.2), not a bound; to reproduce the paper only"));
   cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str()->check(integer_in(4, 4096));
   cmd->add_option("--dov-cubes", a->dov_cubes, "DoV: cube maps by " + dov_modes + " (exact: GL at level 0, the reference)")->capture_default_str();
   cmd->add_option("--dov-compare", a->dov_compare, "DoV: time exact against --dov-cubes on this many cells, interleaved, and print how far their DoVs differ; write nothing")->check(integer_in(0, 100000));
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
   cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_flag("--json", a->json, "Print the report as JSON");
-  cmd->callback([a] {
+  cmd->callback([a, vlod_options] {
+    for (const CLI::Option* o : vlod_options)
+      if (o->count() > 0 && a->engine != "vlod")
+        fail("pvs " + o->get_name(), "chooses the levels of the vlod engine only; give --engine vlod or leave it out");
     a->options.dov_cubes = parse_dov_cubes(a->dov_cubes);
     a->options.lod_rule.lens = Lens{float(a->lod_fov / 57.29577951308232), float(a->lod_aspect), float(a->lod_height)};
     if (a->faithful_bound) a->options.lod_rule.formula = CellBoundFormula::kFaithful;
