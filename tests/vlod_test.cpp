@@ -10,6 +10,9 @@
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/random.hpp"
 #include "cellwalk/precompute/conservative_visibility.hpp"
+#include "cellwalk/precompute/engine.hpp"
+#include "precompute/embree_scene.hpp"
+#include "precompute/pvs_builder.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/vlod/vlod_strategy.hpp"
 #include "cellwalk/visibility/cell_lod.hpp"
@@ -181,6 +184,35 @@ TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
   r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy vlod --width 640 --height 480 -o " + dir_->file("w1"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--lod-height"), std::string::npos) << r.output;
+}
+
+// §2.1: the octree refines a cell while its vLOD has more triangles than the threshold (unless
+// the futility rule stops it): above every root cell's count nothing is refined; below the
+// largest some root is, and every leaf is no larger than its root.
+TEST_F(VlodCity, OctreeRefinesByTheTrianglesOfTheVlod) {
+  const World world(world_);
+  EngineOptions options;
+  options.refine_levels = 1;
+  options.lod_rule.lens.viewport_height_px = 72;
+  const auto engine = make_engine("vlod", world, options);
+  const visibility::EmbreeScene scene(world);
+  const CellSetSize measure = visibility::drawn_triangles(*engine, world, options.lod_rule);
+  const auto roots = visibility::make_partition("grid:80", world, scene);
+  uint64_t largest = 0;
+  for (CellId c = 0; c < roots->cell_count(); ++c) largest = std::max(largest, measure(roots->cell(c).box));
+  ASSERT_GT(largest, 0u);
+  const auto flat = visibility::make_partition("octree:80:" + std::to_string(largest) + ":3", world, scene, measure);
+  EXPECT_EQ(flat->cell_count(), roots->cell_count());
+  const auto refined = visibility::make_partition("octree:80:" + std::to_string(largest / 4) + ":3", world, scene, measure);
+  EXPECT_GT(refined->cell_count(), roots->cell_count());
+  uint32_t deepest = 0;
+  for (CellId c = 0; c < refined->cell_count(); ++c) {
+    const ViewCell& cell = refined->cell(c);
+    deepest = std::max(deepest, cell.depth);
+    EXPECT_LE(cell.depth, 3u);
+    EXPECT_LE(cell.box.size().x, 80.0f * 1.0001f);
+  }
+  EXPECT_GT(deepest, 0u);
 }
 
 }  // namespace

@@ -157,9 +157,12 @@ void run_merge(const Args& a, const World& world) {
 }
 
 // The cells spec's partition, restricted to the cells along the --along path when one is given.
-std::unique_ptr<ViewCellPartition> cells_of_run(const Args& a, const World& world) {
+// An octree for the vlod engine is refined by the triangles of its candidate cells' vLODs (§2.1).
+std::unique_ptr<ViewCellPartition> cells_of_run(const Args& a, const World& world, const VisibilityEngine* engine = nullptr) {
   const visibility::EmbreeScene scene(world);
-  std::unique_ptr<ViewCellPartition> partition = visibility::make_partition(a.cells, world, scene);
+  const CellSetSize measure = engine && a.engine == "vlod" ? visibility::drawn_triangles(*engine, world, a.options.lod_rule)
+                                                           : CellSetSize{};
+  std::unique_ptr<ViewCellPartition> partition = visibility::make_partition(a.cells, world, scene, measure);
   if (a.along.empty()) return partition;
   const CameraPath path = read_path(a.along);
   warn_if_other_world(path, a.along, world.info(), a.world);
@@ -170,7 +173,7 @@ void run_compute(const Args& a, const World& world) {
   if (a.dov_compare > 0) return run_dov_compare(a, world, *cells_of_run(a, world));
   auto setup = std::chrono::steady_clock::now();
   const std::unique_ptr<VisibilityEngine> engine = make_engine(a.engine, world, a.options);
-  const std::unique_ptr<ViewCellPartition> partition = cells_of_run(a, world);
+  const std::unique_ptr<ViewCellPartition> partition = cells_of_run(a, world, engine.get());
   const double setup_s = seconds_since(setup);
   const visibility::PvsRun run = visibility::make_pvs_run(*engine, a.cells, a.options, a.shard, a.threads);
   if (a.check > 0) return run_check(a, world, *engine, *partition);

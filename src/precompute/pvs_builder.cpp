@@ -239,8 +239,17 @@ class CheckpointWriter {
 
 }  // namespace
 
+CellSetSize drawn_triangles(const VisibilityEngine& engine, const World& world, const CellLodRule& rule) {
+  return [&engine, &world, rule](const Aabb& box) {
+    uint64_t triangles = 0;
+    for (ObjectId id : engine.compute(ViewCell{0, box, 0, false}).objects)
+      triangles += world.lod(id, cell_level(world, id, box, rule)).triangles;
+    return triangles;
+  };
+}
+
 std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const World& world,
-                                                  const EmbreeScene& scene) {
+                                                  const EmbreeScene& scene, const CellSetSize& set_size) {
   const std::vector<std::string> parts = split_colons(spec);
   const std::string& kind = parts[0];
   const SolidTest solid = [&scene](const Aabb& box) { return scene.box_is_solid(box); };
@@ -261,7 +270,7 @@ std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const
       fail("cells spec '" + spec + "'", "octree depth must be at most 10; give a smaller DEPTH");
     rules.threshold = uint64_t(threshold);
     rules.max_depth = uint32_t(depth);
-    return make_octree_partition(region, rules, sampled_triangles(world), solid);
+    return make_octree_partition(region, rules, set_size ? set_size : sampled_triangles(world), solid);
   }
   fail("cells spec '" + spec + "'", "expected grid:SIZE, grid3d:SIZE, kd:SIZE or octree[:ROOT[:THRESHOLD[:DEPTH]]]");
 }

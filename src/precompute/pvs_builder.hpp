@@ -17,11 +17,15 @@
 namespace cellwalk::visibility {
 
 // Builds the partition a spec names: "grid:SIZE" (2D at eye height), "grid3d:SIZE",
-// "kd:SIZE", "octree[:ROOT[:THRESHOLD[:DEPTH]]]" (THRESHOLD in level-0 triangles of the
-// visible set, measured by a light sampling engine). Cells inside objects are marked solid.
-// Throws Error on a malformed spec.
+// "kd:SIZE", "octree[:ROOT[:THRESHOLD[:DEPTH]]]" (THRESHOLD in triangles of the visible set:
+// `set_size` when given, else level-0 triangles of what a light sampling engine sees). Cells
+// inside objects are marked solid. Throws Error on a malformed spec.
 std::unique_ptr<ViewCellPartition> make_partition(const std::string& spec, const World& world,
-                                                  const EmbreeScene& scene);
+                                                  const EmbreeScene& scene, const CellSetSize& set_size = {});
+
+// vLOD §2.1's measure of a candidate cell: the triangles of its vLOD, i.e. of the levels `rule`
+// draws of the objects `engine` keeps. The engine and the world must outlive the result.
+CellSetSize drawn_triangles(const VisibilityEngine& engine, const World& world, const CellLodRule& rule);
 
 // `partition` with every cell farther than `margin` metres from the camera path skipped: a
 // cell is kept when the path's polyline (frame to frame) meets its box grown by `margin` on
