@@ -64,6 +64,8 @@ TEST_F(WalkTest, BruteMatchesGroundTruthExactly) {
   FidelitySummary s = summarize(frames);
   EXPECT_EQ(s.max_differing_fraction, 0.0);
   EXPECT_EQ(s.missed_objects, 0u);
+  EXPECT_EQ(s.max_pixel_error_px, 0.0);
+  EXPECT_EQ(s.unmatched_test_pixels + s.unmatched_truth_pixels, 0u);
   EXPECT_GT(s.visible_objects, 12u);  // the frames did show objects
 }
 
@@ -84,6 +86,8 @@ TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
   options.every = 5;
   FidelitySummary s = summarize(compare(path_, lens_, dropping, truth, *renderer_, options));
   EXPECT_GT(s.missed_objects, 0u);
+  // Each miss is an object truth shows and the test nowhere: its pixels have no match.
+  EXPECT_GE(s.unmatched_truth_pixels, s.missed_objects);
   EXPECT_LT(s.recall, 1.0);
   EXPECT_GT(s.max_differing_fraction, 0.0);
 }
@@ -131,6 +135,11 @@ TEST(CompareImages, CountsDifferencesAndMissedObjects) {
   FidelityFrame same = compare_images(a, ia, a, ia, nullptr);
   EXPECT_EQ(same.differing_fraction, 0.0);
   EXPECT_TRUE(std::isinf(same.psnr_db));
+  // Pixel 1 differs: truth shows no background for the test's, the test no object 2 for truth's.
+  EXPECT_EQ(f.test_to_truth.unmatched, 1u);
+  EXPECT_EQ(f.truth_to_test.unmatched, 1u);
+  EXPECT_EQ(f.pixel_error_max_px(), 0.0);
+  EXPECT_EQ(same.test_to_truth.unmatched + same.truth_to_test.unmatched, 0u);
 }
 
 TEST(WalkCommand, WritesCsvAndJson) {
@@ -188,11 +197,17 @@ TEST(WalkCommand, SeveralStrategiesSideBySide) {
   auto fidelities = nlohmann::json::parse(r.output.substr(r.output.find('[')));
   ASSERT_EQ(fidelities.size(), 2u);
   EXPECT_EQ(fidelities[1]["strategy"], "conv");
+  for (const auto& run : fidelities) {
+    EXPECT_EQ(run["pixel_error"]["max_px"], 0.0) << run;
+    EXPECT_EQ(run["pixel_error"]["unmatched_truth_pixels"], 0) << run;
+  }
   std::ifstream fidelity(dir.file("cmp/compare.md"));
   std::string line;
   int perfect = 0;
   while (std::getline(fidelity, line))
-    if (line.find(" 0 of ") != std::string::npos && line.find("inf (identical)") != std::string::npos) ++perfect;
+    if (line.find(" 0 of ") != std::string::npos && line.find("inf (identical)") != std::string::npos &&
+        line.find("| 0.00 (0 %) | 0.00 (0 %) |") != std::string::npos)
+      ++perfect;
   EXPECT_EQ(perfect, 2) << r.output;
 }
 

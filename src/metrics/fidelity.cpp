@@ -1,5 +1,6 @@
-// Fidelity against ground truth: differing pixels, PSNR, visible objects missed, and the
-// stratified-rendering thesis's difference images (difference + 128).
+// Fidelity against ground truth: differing pixels, PSNR, visible objects missed, the pixel
+// error (issue 14, src/metrics/pixel_error.cpp), and the stratified-rendering thesis's
+// difference images (difference + 128).
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -45,6 +46,8 @@ FidelityFrame compare_images(const Image& truth, const IdImage& truth_ids, const
   seen_truth.erase(kBackgroundId);
   f.visible_objects = seen_truth.size();
   for (uint32_t id : seen_truth) f.missed_objects += seen_test.count(id) ? 0 : 1;
+  f.test_to_truth = pixel_error(test_ids, truth_ids);
+  f.truth_to_test = pixel_error(truth_ids, test_ids);
   return f;
 }
 
@@ -93,8 +96,18 @@ FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
     s.visible_objects += f.visible_objects;
     s.missed_objects += f.missed_objects;
     if (std::isfinite(f.psnr_db)) mse_sum += kPeak / std::pow(10.0, f.psnr_db / 10.0);
+    s.max_pixel_error_px = std::max(s.max_pixel_error_px, f.pixel_error_max_px());
+    s.max_pixel_error_p999_px = std::max(s.max_pixel_error_p999_px, f.pixel_error_p999_px());
+    s.pixel_error_over_1px_fraction += f.pixel_error_max_px() > 1.0 ? 1 : 0;
+    s.pixel_error_p999_over_1px_fraction += f.pixel_error_p999_px() > 1.0 ? 1 : 0;
+    s.unmatched_test_pixels += f.test_to_truth.unmatched;
+    s.unmatched_truth_pixels += f.truth_to_test.unmatched;
   }
-  if (!frames.empty()) s.mean_differing_fraction /= double(frames.size());
+  if (!frames.empty()) {
+    s.mean_differing_fraction /= double(frames.size());
+    s.pixel_error_over_1px_fraction /= double(frames.size());
+    s.pixel_error_p999_over_1px_fraction /= double(frames.size());
+  }
   const double mean_mse = frames.empty() ? 0.0 : mse_sum / double(frames.size());
   s.mean_psnr_db = mean_mse > 0 ? 10.0 * std::log10(kPeak / mean_mse) : std::numeric_limits<double>::infinity();
   s.recall = s.visible_objects ? 1.0 - double(s.missed_objects) / double(s.visible_objects) : 1.0;
@@ -103,11 +116,20 @@ FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
 
 void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::string& file) {
   std::ostringstream out;
-  out << "frame,differing_fraction,psnr_db,visible_objects,missed_objects\n";
+  out << "frame,differing_fraction,psnr_db,visible_objects,missed_objects,"
+         "test_to_truth_max_px,test_to_truth_p999_px,test_to_truth_unmatched,"
+         "truth_to_test_max_px,truth_to_test_p999_px,truth_to_test_unmatched\n";
   out.precision(6);
-  for (const FidelityFrame& f : frames)
+  auto write_pixel_error = [&out](const PixelErrorStats& e) {
+    out << ',' << e.max_px << ',' << e.p999_px << ',' << e.unmatched;
+  };
+  for (const FidelityFrame& f : frames) {
     out << f.frame << ',' << f.differing_fraction << ',' << f.psnr_db << ',' << f.visible_objects << ','
-        << f.missed_objects << '\n';
+        << f.missed_objects;
+    write_pixel_error(f.test_to_truth);
+    write_pixel_error(f.truth_to_test);
+    out << '\n';
+  }
   write_file_atomically(file, out.str());
 }
 
@@ -120,7 +142,14 @@ std::string to_json(const FidelitySummary& s) {
                               {"mean_psnr_db", number(s.mean_psnr_db)},
                               {"visible_objects", s.visible_objects},
                               {"missed_objects", s.missed_objects},
-                              {"recall", s.recall}};
+                              {"recall", s.recall},
+                              {"pixel_error",
+                               {{"max_px", s.max_pixel_error_px},
+                                {"p999_px", s.max_pixel_error_p999_px},
+                                {"frames_max_over_1px", s.pixel_error_over_1px_fraction},
+                                {"frames_p999_over_1px", s.pixel_error_p999_over_1px_fraction},
+                                {"unmatched_test_pixels", s.unmatched_test_pixels},
+                                {"unmatched_truth_pixels", s.unmatched_truth_pixels}}}};
   return j.dump(2);
 }
 

@@ -7,18 +7,9 @@
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/atomic_file.hpp"
+#include "metrics/percentile.hpp"
 
 namespace cellwalk {
-namespace {
-
-// Nearest-rank percentile of a sorted sample.
-double percentile(const std::vector<double>& sorted, double p) {
-  if (sorted.empty()) return 0.0;
-  size_t rank = static_cast<size_t>(std::ceil(p / 100.0 * sorted.size()));
-  return sorted[std::clamp<size_t>(rank, 1, sorted.size()) - 1];
-}
-
-}  // namespace
 
 WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>& frames) {
   WalkSummary s;
@@ -51,11 +42,10 @@ WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>
   s.mean_io_ms /= n;
   s.mean_decode_ms /= n;
   s.mean_render_ms /= n;
-  std::sort(times.begin(), times.end());
+  s.max_ms = *std::max_element(times.begin(), times.end());
   s.p50_ms = percentile(times, 50);
   s.p95_ms = percentile(times, 95);
   s.p99_ms = percentile(times, 99);
-  s.max_ms = times.back();
   return s;
 }
 

@@ -1,13 +1,16 @@
 // Fidelity against ground truth (the full-detail world, no culling): per frame, differing
-// pixels, PSNR and visible objects missed; `compare` replays a path with a strategy and the
-// truth side by side (src/metrics/fidelity.cpp).
+// pixels, PSNR, visible objects missed and the pixel error (metrics/pixel_error.hpp, both
+// directions); `compare` replays a path with a strategy and the truth side by side
+// (src/metrics/fidelity.cpp).
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/metrics/pixel_error.hpp"
 #include "cellwalk/render/image.hpp"
 #include "cellwalk/render/renderer.hpp"
 #include "cellwalk/runtime/walk.hpp"
@@ -22,14 +25,23 @@ struct FidelityFrame {
   double psnr_db = 0.0;             // over RGB; infinity when identical
   uint64_t visible_objects = 0;     // distinct ids in the ground-truth id buffer
   uint64_t missed_objects = 0;      // of those, absent from the strategy's id buffer
+  PixelErrorStats test_to_truth;    // pixel error from the strategy's image to the truth's
+  PixelErrorStats truth_to_test;    // and back; unmatched pixels are missed objects' pixels
+
+  // The worse direction: the frame's pixel error and its 99.9th percentile.
+  double pixel_error_max_px() const { return std::max(test_to_truth.max_px, truth_to_test.max_px); }
+  double pixel_error_p999_px() const {
+    return std::max(test_to_truth.p999_px, truth_to_test.p999_px);
+  }
 };
 
 struct FidelityImages {
   Image truth, test, difference;
 };
 
-// Compares two renderings of the same camera. The difference image is 128 + (test - truth)
-// per channel, clamped, as the stratified-rendering thesis shows its errors.
+// Compares two renderings of the same camera; the pixel error compares the id images. The
+// difference image is 128 + (test - truth) per channel, clamped, as the stratified-rendering
+// thesis shows its errors.
 FidelityFrame compare_images(const Image& truth, const IdImage& truth_ids, const Image& test,
                              const IdImage& test_ids, Image* difference);
 
@@ -46,6 +58,13 @@ struct FidelitySummary {
   double mean_psnr_db = 0.0;  // PSNR of the mean squared error over all frames; infinity if none differ
   uint64_t visible_objects = 0, missed_objects = 0;
   double recall = 1.0;        // 1 - missed / visible over all compared frames
+  // Pixel error (the worse direction of each frame): the largest over frames of the frame's
+  // maximum and of its 99.9th percentile, and the fraction of frames where each exceeds 1 px.
+  double max_pixel_error_px = 0.0, max_pixel_error_p999_px = 0.0;
+  double pixel_error_over_1px_fraction = 0.0, pixel_error_p999_over_1px_fraction = 0.0;
+  // Pixels with no match, over all frames: the test shows an id truth lacks / truth shows an id
+  // the test lacks. Left out of the figures above.
+  uint64_t unmatched_test_pixels = 0, unmatched_truth_pixels = 0;
 };
 
 std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, Strategy& strategy,
