@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <map>
 
 #include <nlohmann/json.hpp>
 
@@ -16,6 +18,7 @@
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/vlod/vlod_strategy.hpp"
 #include "cellwalk/visibility/cell_lod.hpp"
+#include "cellwalk/visibility/stored_vlod.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -213,6 +216,85 @@ TEST_F(VlodCity, OctreeRefinesByTheTrianglesOfTheVlod) {
     EXPECT_LE(cell.box.size().x, 80.0f * 1.0001f);
   }
   EXPECT_GT(deepest, 0u);
+}
+
+// The vLOD of every cell, straight from the stored sets and the rule: the oracle of the Δs.
+std::map<CellId, std::vector<visibility::PieceId>> vlods_of(const World& world, const visibility::StoredVlod& stored) {
+  const visibility::StoredPvs pvs(world);
+  std::map<CellId, std::vector<visibility::PieceId>> out;
+  for (CellId c = 0; c < pvs.partition().cell_count(); ++c)
+    if (pvs.partition().cell(c).computed())
+      if (const auto set = pvs.set(c))
+        out[c] = visibility::vlod_pieces(world, stored.pieces(), pvs.partition(), c, set->objects, stored.rule());
+  return out;
+}
+
+// §2.3: every stored face Δ takes one cell's vLOD exactly to its neighbour's, in both
+// directions, and every key cell's stored vLOD is its own; every cell is near a key cell.
+TEST_F(VlodCity, FaceDeltasAndKeyCellsRebuildEveryVlod) {
+  const std::string world_file = dir_->file("deltas.cww");
+  auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells octree:40:30000:2 --refine 1 --lod-height 72 -o " + world_file);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("vlod section"), std::string::npos) << r.output;
+  const World world(world_file);
+  const visibility::StoredVlod stored(world);
+  const auto vlods = vlods_of(world, stored);
+  ASSERT_GT(vlods.size(), 4u);
+  uint64_t deltas = 0, keys = 0, changed = 0;
+  for (const auto& [c, vlod] : vlods) {
+    EXPECT_TRUE(stored.has_vlod(c));
+    if (stored.is_key(c)) {
+      EXPECT_EQ(stored.key_vlod(c), vlod) << "key cell " << c;
+      ++keys;
+    }
+    for (CellId n : stored.neighbours(c)) {
+      const auto d = stored.delta(c, n);
+      ASSERT_TRUE(d) << c << "→" << n;
+      std::vector<visibility::PieceId> kept, to;
+      std::set_difference(vlod.begin(), vlod.end(), d->removed.begin(), d->removed.end(), std::back_inserter(kept));
+      std::set_union(kept.begin(), kept.end(), d->added.begin(), d->added.end(), std::back_inserter(to));
+      EXPECT_EQ(to, vlods.at(n)) << c << "→" << n;
+      ++deltas;
+      changed += !d->added.empty() || !d->removed.empty();
+    }
+  }
+  EXPECT_GT(deltas, 0u);
+  EXPECT_GT(changed, 0u) << "every Δ empty: the test shows nothing";
+  EXPECT_GT(keys, 0u);
+  EXPECT_LT(keys, vlods.size());
+}
+
+// The run time's vLOD is the cell's whatever the route: single crossings, several cells in
+// one frame, and teleports, checked against the oracle with culling off (select draws the vLOD).
+TEST_F(VlodCity, TheRunTimeVlodIsTheCellsOwnAfterAnyMove) {
+  const std::string world_file = dir_->file("moves.cww");
+  auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:30 --refine 1 --lod-height 72 -o " + world_file);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const World world(world_file);
+  const visibility::StoredVlod stored(world);
+  const auto vlods = vlods_of(world, stored);
+  VlodStrategy strategy(world, parse_vlod_strategy_name("vlod:cull=0,prefetch=0"), StrategyOptions{});
+  Random rng(9);
+  Aabb all;
+  for (CellId c = 0; c < stored.partition().cell_count(); ++c) all.extend(stored.partition().cell(c).box);
+  Camera camera;
+  camera.position = all.center();
+  camera.position.y = 1.7f;
+  std::vector<DrawItem> items;
+  for (int step = 0; step < 120; ++step) {
+    const float reach = step % 10 == 9 ? 1000.0f : float(rng.uniform(1, 35));  // now and then a teleport
+    camera.position.x = std::clamp(camera.position.x + float(rng.uniform(-reach, reach)), all.min.x + 0.1f, all.max.x - 0.1f);
+    camera.position.z = std::clamp(camera.position.z + float(rng.uniform(-reach, reach)), all.min.z + 0.1f, all.max.z - 0.1f);
+    FrameStats stats;
+    strategy.select(camera, items, stats);
+    const CellId c = *stored.partition().locate(camera.position);
+    if (!stored.has_vlod(c)) continue;  // inside a building: the frame draws the frustum instead
+    std::vector<visibility::PieceId> drawn;
+    for (const DrawItem& item : items) drawn.push_back(stored.pieces().piece(item.id, item.lod));
+    EXPECT_EQ(drawn, vlods.at(c)) << "step " << step << " in cell " << c;
+  }
+  EXPECT_GT(strategy.counters().cell_changes, 20u);
+  EXPECT_GT(strategy.counters().crossings, strategy.counters().cell_changes) << "no move crossed intermediate cells";
 }
 
 }  // namespace

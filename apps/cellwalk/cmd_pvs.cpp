@@ -4,11 +4,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/precompute/engine.hpp"
+#include "cellwalk/visibility/stored_vlod.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
@@ -143,17 +145,59 @@ void run_dov_compare(const Args& a, const World& world, const ViewCellPartition&
               (unsigned long long)c.one_sided, (unsigned long long)c.pairs, c.one_sided_max_dov);
 }
 
+nlohmann::ordered_json vlod_json(const visibility::VlodSizes& s) {
+  nlohmann::ordered_json codecs;
+  for (size_t i = 0; i < std::size(visibility::kIdCodecs); ++i)
+    codecs[visibility::id_codec_name(visibility::kIdCodecs[i])] = s.codec_bytes[i];
+  return {{"cells", s.cells},         {"key_cells", s.keyframes},        {"face_pairs", s.face_pairs},
+          {"delta_ids", s.delta_ids}, {"vlod_ids", s.vlod_ids},          {"bitmask_bytes", s.bitmask_bytes},
+          {"list_bytes", s.list_bytes}, {"codec_bytes", codecs},         {"delta_bytes", s.delta_bytes},
+          {"key_bytes", s.keyframe_bytes}, {"section_bytes", s.section_bytes}};
+}
+
+void print_vlod_sizes(const visibility::VlodSizes& s) {
+  std::printf("  vlod section: %llu face Δs, %.1f ids each (%.1f%% of a vLOD), %llu key cells; Δs %llu bytes as stored "
+              "(smallest codec per Δ) vs %llu as 32-bit ids vs %llu as bitmasks (%.0fx smaller)\n",
+              (unsigned long long)s.face_pairs, double(s.delta_ids) / double(std::max<uint64_t>(s.face_pairs, 1)),
+              100.0 * double(s.delta_ids) * double(std::max<uint64_t>(s.cells, 1)) /
+                  double(std::max<uint64_t>(s.face_pairs, 1)) / double(std::max<uint64_t>(s.vlod_ids, 1)),
+              (unsigned long long)s.keyframes, (unsigned long long)s.delta_bytes, (unsigned long long)s.list_bytes,
+              (unsigned long long)s.bitmask_bytes, double(s.bitmask_bytes) / double(std::max<uint64_t>(s.delta_bytes, 1)));
+  std::printf("   one codec for every Δ:");
+  for (size_t i = 0; i < std::size(visibility::kIdCodecs); ++i)
+    std::printf(" %s %llu", visibility::id_codec_name(visibility::kIdCodecs[i]).c_str(), (unsigned long long)s.codec_bytes[i]);
+  std::printf(" bytes\n");
+}
+
+// Writes the sets into `out`; a vlod run's section of per-face Δs and key cells goes with them.
+visibility::PvsSizes write_sets(const World& world, const std::string& out, const ViewCellPartition& partition,
+                                const visibility::CellSets& sets, const visibility::PvsRun& run,
+                                std::optional<visibility::VlodSizes>& vlod) {
+  std::vector<visibility::ExtraSection> extra;
+  const std::string prefix = "vlod:";
+  if (run.engine.rfind(prefix, 0) == 0) {
+    const visibility::CellLodRule rule = visibility::parse_cell_lod_rule(run.engine.substr(prefix.size()), "pvs run");
+    vlod.emplace();
+    extra.push_back({visibility::kVlodSection, visibility::encode_vlod_section(world, partition, sets, rule, *vlod)});
+  }
+  return visibility::write_world_with_pvs(world, out, partition, sets, run, extra);
+}
+
 void run_merge(const Args& a, const World& world) {
   const std::string out = a.out.empty() ? a.world : a.out;
   refuse_same_files(a.merge, {out});
   const visibility::PvsMerge merged = visibility::merge_pvs_parts(a.merge, world);
-  const visibility::PvsSizes sizes = visibility::write_world_with_pvs(world, out, *merged.partition, merged.sets, merged.run);
+  std::optional<visibility::VlodSizes> vlod;
+  const visibility::PvsSizes sizes = write_sets(world, out, *merged.partition, merged.sets, merged.run, vlod);
   if (a.json) {
-    std::printf("%s\n", nlohmann::ordered_json({{"world", out}, {"parts", a.merge.size()}, {"sizes", sizes_json(sizes)}}).dump(2).c_str());
+    nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}, {"sizes", sizes_json(sizes)}};
+    if (vlod) j["vlod"] = vlod_json(*vlod);
+    std::printf("%s\n", j.dump(2).c_str());
     return;
   }
   std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
   print_sizes(sizes);
+  if (vlod) print_vlod_sizes(*vlod);
 }
 
 // The cells spec's partition, restricted to the cells along the --along path when one is given.
@@ -197,8 +241,9 @@ void run_compute(const Args& a, const World& world) {
   progress.reset();
   const uint64_t computed = sets.size() - resumed;
   visibility::PvsSizes sizes;
+  std::optional<visibility::VlodSizes> vlod;
   if (!sharded) {
-    sizes = visibility::write_world_with_pvs(world, out, *partition, sets, run);
+    sizes = write_sets(world, out, *partition, sets, run, vlod);
     std::filesystem::remove(checkpoint);
   }
   uint64_t solid = 0, skipped = 0;
@@ -214,6 +259,7 @@ void run_compute(const Args& a, const World& world) {
                                 {"computed", computed}, {"resumed", resumed}, {"setup_seconds", setup_s},
                                 {"seconds", compute_s}, {"cells_per_second", rate}};
     if (!sharded) j["sizes"] = sizes_json(sizes);
+    if (vlod) j["vlod"] = vlod_json(*vlod);
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -222,6 +268,7 @@ void run_compute(const Args& a, const World& world) {
               engine->name().c_str(), partition->cell_count(), partition->kind().c_str(), (unsigned long long)solid,
               (unsigned long long)skipped, (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
   if (!sharded) print_sizes(sizes);
+  if (vlod) print_vlod_sizes(*vlod);
   std::printf("  wrote %s\n", out.c_str());
 }
 

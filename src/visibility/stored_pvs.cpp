@@ -4,6 +4,7 @@
 // DoV). Layouts in docs/format.md, "Visibility sections". Run-time code: no Embree, no GL.
 #include "cellwalk/visibility/stored_pvs.hpp"
 
+#include <algorithm>
 #include <cstring>
 
 #include "cellwalk/core/error.hpp"
@@ -101,7 +102,7 @@ void write_section(WorldWriter& w, const char* name, std::span<const uint8_t> by
 }  // namespace
 
 PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
-                              const CellSets& sets, const PvsRun& run) {
+                              const CellSets& sets, const PvsRun& run, const std::vector<ExtraSection>& extra) {
   for (CellId c = 0; c < partition.cell_count(); ++c)
     if (partition.cell(c).computed() && !sets.count(c))
       fail("pvs", "cell " + std::to_string(c) + " has no visible set; compute or merge every shard first");
@@ -114,6 +115,7 @@ PvsSizes write_world_with_pvs(const World& world, const std::string& out, const 
   constexpr uint64_t kChunk = 1 << 20;
   for (const SectionInfo& s : world.file().sections()) {
     if (s.name == kCellsSection || s.name == kPvsSection || s.name == kDovSection) continue;
+    if (std::any_of(extra.begin(), extra.end(), [&](const ExtraSection& e) { return e.name == s.name; })) continue;
     w.begin_section(s.name);
     for (uint64_t at = 0; at < s.bytes; at += kChunk) w.write(world.file().read(s, at, std::min(kChunk, s.bytes - at)));
     w.end_section();
@@ -121,6 +123,7 @@ PvsSizes write_world_with_pvs(const World& world, const std::string& out, const 
   write_section(w, kCellsSection, serialize_partition(partition));
   write_section(w, kPvsSection, pvs);
   if (with_dov) write_section(w, kDovSection, dov);
+  for (const ExtraSection& e : extra) write_section(w, e.name.c_str(), e.bytes);
   w.finish();
   return sizes;
 }

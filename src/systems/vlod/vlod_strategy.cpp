@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
+#include <iterator>
 #include <optional>
 
 #include "cellwalk/core/byte_size.hpp"
@@ -14,7 +16,7 @@
 #include "cellwalk/store/geometry_store.hpp"
 #include "cellwalk/store/prefetcher.hpp"
 #include "cellwalk/visibility/cell_lod.hpp"
-#include "cellwalk/visibility/stored_pvs.hpp"
+#include "cellwalk/visibility/stored_vlod.hpp"
 #include "core/stopwatch.hpp"
 #include "strategy/strategy_config.hpp"
 
@@ -35,28 +37,20 @@ VlodConfig parse_vlod_strategy_name(const std::string& name) {
 
 namespace {
 
-constexpr const char* kEnginePrefix = "vlod:";
+using visibility::PieceId;
 
-// One entry of a vLOD: an object at the level its cell draws it (vLOD's "id": a polygon group).
-struct Piece {
-  ObjectId id;
-  uint32_t level;
-  auto operator<=>(const Piece&) const = default;
-};
+// The most face steps searched for a chain of Δs between two cells before the move is taken as
+// a teleport (rebuilt from the nearest key cell).
+constexpr int kMaxChain = 16;
 
-const World& with_sets(const World& world) {
-  if (!world.file().has_section(visibility::kCellsSection) || !world.file().has_section(visibility::kPvsSection))
-    fail(world.file().path(), "has no vLOD sets; run `cellwalk pvs " + world.file().path() + " --engine vlod` first");
-  return world;
+void apply(std::vector<PieceId>& vlod, const visibility::VlodDelta& d) {
+  std::vector<PieceId> kept, out;
+  std::set_difference(vlod.begin(), vlod.end(), d.removed.begin(), d.removed.end(), std::back_inserter(kept));
+  std::set_union(kept.begin(), kept.end(), d.added.begin(), d.added.end(), std::back_inserter(out));
+  vlod.swap(out);
 }
 
-visibility::CellLodRule rule_of(const World& world, const visibility::StoredPvs& pvs) {
-  if (pvs.engine().rfind(kEnginePrefix, 0) != 0)
-    fail(world.file().path(), "its stored sets come from engine '" + pvs.engine() +
-                                  "', not vlod; run `cellwalk pvs " + world.file().path() + " --engine vlod`");
-  return visibility::parse_cell_lod_rule(pvs.engine().substr(std::char_traits<char>::length(kEnginePrefix)),
-                                         world.file().path() + " section pvs");
-}
+uint64_t bytes_of(const visibility::VlodDelta& d) { return (d.added.capacity() + d.removed.capacity()) * sizeof(PieceId); }
 
 }  // namespace
 
@@ -65,62 +59,38 @@ struct VlodStrategy::Impl {
       : world(w),
         config(c),
         options(o),
-        pvs(with_sets(w)),
-        rule(rule_of(w, pvs)),
+        vlod(w),
         store(w, o.memory_budget_bytes, nullptr, c.prefetch ? 2 : 1),
         prefetcher(store.buffer(), PrefetcherOptions{c.prefetch ? 1u : 0u, 1}) {
-    sets_bytes = pvs.resident_bytes();
-    if (!store.buffer().budget().try_reserve(sets_bytes))
+    index_bytes = vlod.resident_bytes();
+    if (!store.buffer().budget().try_reserve(index_bytes))
       fail(w.file().path(), "memory budget of " + byte_size_text(o.memory_budget_bytes) +
-                                " cannot hold the stored vLOD sets (" + byte_size_text(sets_bytes) +
+                                " cannot hold the vLOD index (" + byte_size_text(index_bytes) +
                                 ") beside the directory and the loads in flight; give a larger --budget");
   }
-  ~Impl() { store.buffer().budget().release(sets_bytes); }
+  ~Impl() {
+    drop_face_deltas();
+    store.buffer().budget().release(index_bytes + pieces_bytes);
+  }
 
   const World& world;
   VlodConfig config;
   StrategyOptions options;
-  visibility::StoredPvs pvs;
-  visibility::CellLodRule rule;
+  visibility::StoredVlod vlod;
   GeometryStore store;
-  uint64_t sets_bytes = 0;
-  std::optional<CellId> cell;        // the cell whose vLOD `pieces` is; none outside every cell
-  std::vector<Piece> pieces;         // ascending
-  std::optional<Vec3> last_position;
+  uint64_t index_bytes = 0;
+  std::optional<CellId> cell;       // the cell whose vLOD `pieces` is; none outside every cell
+  std::vector<PieceId> pieces;      // ascending
+  uint64_t pieces_bytes = 0;        // charged for `pieces`
+  // §6: the Δs of the current cell's faces, read on entering it, charged to the budget.
+  std::vector<std::pair<CellId, visibility::VlodDelta>> face_deltas;
+  uint64_t face_bytes = 0;
   VlodCounters counters;
   std::shared_ptr<const Mesh> current;  // the mesh handed to the renderer for upload
   Prefetcher prefetcher;                // last: destroyed first, while what its jobs use exists
 
-  std::vector<Piece> vlod_of(CellId c) const {
-    std::vector<Piece> out;
-    const std::optional<VisibleSet> set = pvs.set(c);
-    if (!set) return out;
-    const Aabb& box = pvs.partition().cell(c).box;
-    out.reserve(set->objects.size());
-    for (ObjectId id : set->objects) out.push_back({id, visibility::cell_level(world, id, box, rule)});
-    return out;
-  }
-
-  // Cell boundaries between two positions: the cells met at steps of a quarter of the smallest
-  // cell side met so far (the seed's "intermediate cells" of a fast move).
-  uint64_t boundaries_crossed(const Vec3& from, const Vec3& to) const {
-    const ViewCellPartition& cells = pvs.partition();
-    std::optional<CellId> at = cells.locate(from);
-    uint64_t crossed = 0;
-    float t = 0.0f;
-    const float length = glm::length(to - from);
-    while (t < length) {
-      const Vec3 size = at ? cells.cell(*at).box.size() : Vec3(1.0f);
-      const float side = std::min({size.x, size.y, size.z});
-      t = std::min(length, t + std::max(0.25f * side, 1e-3f));
-      const std::optional<CellId> next = cells.locate(from + (to - from) * (t / length));
-      if (next != at) ++crossed;
-      at = next;
-    }
-    return crossed;
-  }
-
   void check_lens(const Camera& camera) const {
+    const visibility::CellLodRule& rule = vlod.rule();
     const float height = options.viewport_height_px > 0 ? options.viewport_height_px : rule.lens.viewport_height_px;
     if (!visibility::rule_covers(rule, lens_of(camera, height)))
       fail("vlod", "the levels were chosen for " + visibility::to_string(rule) + ", and an image " +
@@ -129,47 +99,118 @@ struct VlodStrategy::Impl {
                        "`cellwalk pvs --engine vlod` with a larger --lod-height or --lod-fov");
   }
 
-  // The Δ to the new cell's vLOD: R is dropped (evictable), A is loaded as it is drawn.
-  void enter(CellId c, const Vec3& position, uint64_t frame) {
-    std::vector<Piece> next = vlod_of(c);
-    std::vector<Piece> added, removed;
-    std::set_difference(next.begin(), next.end(), pieces.begin(), pieces.end(), std::back_inserter(added));
-    std::set_difference(pieces.begin(), pieces.end(), next.begin(), next.end(), std::back_inserter(removed));
-    for (const Piece& p : removed) store.buffer().erase(GeometryStore::key(p.id, p.level));
-    ++counters.cell_changes;
-    counters.added += added.size();
-    counters.removed += removed.size();
-    counters.delta_fractions.push_back(next.empty() ? 0.0 : double(added.size() + removed.size()) / double(next.size()));
-    pieces = std::move(next);
-    cell = c;
-    if (config.prefetch) prefetch_neighbours(c, position, frame);
+  // Charges `bytes` more (or fewer) to the hard budget, evicting cached geometry if it must.
+  void recharge(uint64_t& held, uint64_t bytes) {
+    MemoryBudget& budget = store.buffer().budget();
+    budget.release(held);
+    held = 0;
+    if (!budget.try_reserve(bytes))
+      fail("vlod", "memory budget of " + byte_size_text(options.memory_budget_bytes) + " cannot hold the vLOD of cell " +
+                       std::to_string(cell ? *cell : 0) + " (" + byte_size_text(bytes) + "); give a larger --budget");
+    held = bytes;
   }
 
-  // §6: the six face Δs' additions, nearest neighbour first; requests of older cells are dropped.
-  void prefetch_neighbours(CellId c, const Vec3& position, uint64_t frame) {
-    prefetcher.cancel_older_than(frame);
-    for (CellId n : pvs.partition().face_neighbours(c)) {
-      if (!pvs.partition().cell(n).computed()) continue;
-      const double priority = -double(distance_to_box(position, pvs.partition().cell(n).box));
-      for (const Piece& p : vlod_of(n)) {
-        if (std::binary_search(pieces.begin(), pieces.end(), p)) continue;
-        prefetcher.submit({GeometryStore::key(p.id, p.level), priority, frame, EntryMeta{}, store.loader(p.id, p.level)});
-        ++counters.prefetch_requests;
+  void drop_face_deltas() {
+    face_deltas.clear();
+    store.buffer().budget().release(face_bytes);
+    face_bytes = 0;
+  }
+
+  // The Δ from the current cell to `next`: the prefetched one, else read now.
+  std::optional<visibility::VlodDelta> delta_to(CellId from, CellId next) {
+    if (cell && from == *cell)
+      for (auto& [n, d] : face_deltas)
+        if (n == next) return std::move(d);
+    return vlod.delta(from, next);
+  }
+
+  // Face steps from `from` to `to` over cells with vLODs (BFS, at most kMaxChain); empty if none.
+  std::vector<CellId> chain(CellId from, const std::function<bool(CellId)>& is_goal) const {
+    std::vector<int> parent(vlod.partition().cell_count(), -1);
+    std::vector<CellId> frontier{from};
+    parent[from] = int(from);
+    for (int step = 0; step <= kMaxChain && !frontier.empty(); ++step) {
+      std::vector<CellId> next;
+      for (CellId c : frontier) {
+        if (is_goal(c)) {
+          std::vector<CellId> path{c};
+          while (path.back() != from) path.push_back(CellId(parent[path.back()]));
+          return path;  // goal first, `from` last
+        }
+        for (CellId n : vlod.neighbours(c))
+          if (parent[n] < 0) parent[n] = int(c), next.push_back(n);
       }
+      frontier.swap(next);
+    }
+    return {};
+  }
+
+  // §2.3 / digest §3.8: from the current cell through each intermediate cell to `target`, one
+  // Δ per face crossed; a move with no chain of Δs (a teleport, the start) is rebuilt from the
+  // nearest key cell.
+  void move_to(CellId target) {
+    std::vector<CellId> steps;
+    if (cell) {
+      steps = chain(target, [&](CellId c) { return c == *cell; });  // the current cell first
+    }
+    if (steps.empty()) {
+      steps = chain(target, [&](CellId c) { return vlod.is_key(c); });
+      if (steps.empty()) fail("vlod", "cell " + std::to_string(target) + " has no key cell within " + std::to_string(kMaxChain) + " face steps (the vlod section is damaged)");
+      pieces = vlod.key_vlod(steps.front());
+      cell = steps.front();
+      drop_face_deltas();
+    }
+    for (size_t i = 1; i < steps.size(); ++i) {
+      const std::optional<visibility::VlodDelta> d = delta_to(steps[i - 1], steps[i]);
+      if (!d) fail("vlod", "no Δ from cell " + std::to_string(steps[i - 1]) + " to " + std::to_string(steps[i]) + " (the vlod section is damaged)");
+      for (PieceId p : d->removed)
+        store.buffer().erase(GeometryStore::key(vlod.pieces().object(p), vlod.pieces().level(p)));
+      apply(pieces, *d);
+      ++counters.crossings;
+      counters.added += d->added.size();
+      counters.removed += d->removed.size();
+      cell = steps[i];
+      drop_face_deltas();
     }
   }
 
+  // §6: read the Δs of the new cell's faces and prefetch the geometry they add, nearest first.
+  void prefetch_faces(const Vec3& position, uint64_t frame) {
+    prefetcher.cancel_older_than(frame);
+    uint64_t bytes = 0;
+    for (CellId n : vlod.neighbours(*cell)) {
+      std::optional<visibility::VlodDelta> d = vlod.delta(*cell, n);
+      if (!d) continue;
+      const double priority = -double(distance_to_box(position, vlod.partition().cell(n).box));
+      for (PieceId p : d->added) {
+        const ObjectId id = vlod.pieces().object(p);
+        const uint32_t level = vlod.pieces().level(p);
+        prefetcher.submit({GeometryStore::key(id, level), priority, frame, EntryMeta{}, store.loader(id, level)});
+        ++counters.prefetch_requests;
+      }
+      bytes += bytes_of(*d);
+      face_deltas.emplace_back(n, std::move(*d));
+    }
+    recharge(face_bytes, bytes);
+  }
+
   void follow(const Vec3& position) {
-    const ViewCellPartition& cells = pvs.partition();
+    const ViewCellPartition& cells = vlod.partition();
     const std::optional<CellId> c = cells.locate(position);
     if (c && cells.cell(*c).skipped) fail_in_skipped_cell("vlod", cells.cell(*c), position);
-    if (last_position) counters.crossings += boundaries_crossed(*last_position, position);
-    last_position = position;
-    const bool usable = c && !cells.cell(*c).solid;
-    if (usable && c != cell) enter(*c, position, counters.frames);
+    const bool usable = c && vlod.has_vlod(*c);
+    if (usable && c != cell) {
+      const uint64_t changed = counters.added + counters.removed;
+      move_to(*c);
+      ++counters.cell_changes;
+      counters.delta_fractions.push_back(pieces.empty() ? 0.0 : double(counters.added + counters.removed - changed) / double(pieces.size()));
+      recharge(pieces_bytes, pieces.capacity() * sizeof(PieceId));
+      if (config.prefetch) prefetch_faces(position, counters.frames);
+    }
     if (!usable) {
       cell.reset();
       pieces.clear();
+      drop_face_deltas();
     }
   }
 };
@@ -201,7 +242,7 @@ void VlodStrategy::select(const Camera& camera, std::vector<DrawItem>& items, Fr
     if (!s.config.cull || frustum.intersects(o.bounds)) items.push_back({id, level, o.color});
   };
   if (s.cell) {
-    for (const Piece& p : s.pieces) add(p.id, p.level);
+    for (PieceId p : s.pieces) add(s.vlod.pieces().object(p), s.vlod.pieces().level(p));
   } else {
     for (ObjectId id = 0; id < s.world.object_count(); ++id)
       if (frustum.intersects(s.world.object(id).bounds)) add(id, 0);

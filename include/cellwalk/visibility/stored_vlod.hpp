@@ -1,0 +1,115 @@
+// The stored vLODs of a world (section "vlod"; docs/format.md, "The vlod section"): per shared
+// face, the Δ between the two cells' vLODs, and full vLODs for sparse key cells, for start-up
+// and teleports (seed 001 §2.3–§2.4; digest 001 §3.3, §4 and its [ours] keyframes).
+// An id of a vLOD is a *piece*: one level of one object, numbered as the world's level table
+// (object.first_lod + level), so a cell change that only coarsens an object is a Δ too.
+// Depends on the store only (no Embree, no GL), so a server can stream Δs.
+#pragma once
+
+#include <array>
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/visibility/cell_lod.hpp"
+#include "cellwalk/visibility/id_codec.hpp"
+#include "cellwalk/visibility/stored_pvs.hpp"
+
+namespace cellwalk::visibility {
+
+inline constexpr const char* kVlodSection = "vlod";
+
+using PieceId = uint32_t;
+
+// The pieces of every object's levels in the world's level table order, and back.
+class PieceTable {
+ public:
+  explicit PieceTable(const World& world);
+  PieceId piece(ObjectId id, uint32_t level) const { return first_[id] + level; }
+  ObjectId object(PieceId p) const { return owner_[p]; }
+  uint32_t level(PieceId p) const { return p - first_[owner_[p]]; }
+  uint64_t count() const { return owner_.size(); }
+
+ private:
+  std::vector<uint32_t> first_;
+  std::vector<ObjectId> owner_;
+};
+
+// A cell's vLOD as pieces, ascending: each object of its set at the level `rule` draws there.
+std::vector<PieceId> vlod_pieces(const World& world, const PieceTable& pieces, const ViewCellPartition& partition,
+                                 CellId cell, std::span<const ObjectId> set, const CellLodRule& rule);
+
+// From one cell's vLOD to a face neighbour's: to = (from ∪ added) \ removed.
+struct VlodDelta {
+  std::vector<PieceId> added, removed;
+};
+
+// What the section costs, beside the forms vLOD §2.4 compares it with.
+struct VlodSizes {
+  uint64_t cells = 0, keyframes = 0, face_pairs = 0;
+  uint64_t delta_ids = 0, vlod_ids = 0;     // Σ |A| + |R| over the pairs; Σ |vLOD| over the cells
+  uint64_t bitmask_bytes = 0;                // each Δ as two bitmasks over every piece
+  uint64_t list_bytes = 0;                   // each Δ as plain 32-bit ids
+  std::array<uint64_t, std::size(kIdCodecs)> codec_bytes{};  // every Δ in one codec, per codec
+  uint64_t delta_bytes = 0;                  // the Δ records as stored (each in its smallest codec)
+  uint64_t keyframe_bytes = 0;
+  uint64_t section_bytes = 0;
+};
+
+// Encodes the section from the run's sets (the pvs section's, a vlod engine's). Key cells: in
+// id order, a cell with a vLOD and no key cell within `key_spacing` face steps becomes one.
+std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
+                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing = 3);
+
+// Reads the section's index (per cell: key frame and the Δ records of its faces) and reads each
+// record from the file when asked. Thread-safety: const methods may be called concurrently.
+class StoredVlod {
+ public:
+  // Throws Error naming the command to run if the world has no vlod section, or on damage.
+  explicit StoredVlod(const World& world);
+  const ViewCellPartition& partition() const { return *partition_; }
+  const CellLodRule& rule() const { return rule_; }
+  const PieceTable& pieces() const { return pieces_; }
+  bool has_vlod(CellId cell) const { return cells_.at(cell).has_vlod; }
+  bool is_key(CellId cell) const { return cells_.at(cell).key_bytes > 0; }
+  // The full vLOD of a key cell. REQUIRES is_key(cell).
+  std::vector<PieceId> key_vlod(CellId cell) const;
+  // The Δ from `from` to its face neighbour `to`; nullopt when they share no stored Δ (one has
+  // no vLOD, or they are not face neighbours).
+  std::optional<VlodDelta> delta(CellId from, CellId to) const;
+  // The face neighbours `cell` has a Δ to.
+  std::vector<CellId> neighbours(CellId cell) const;
+  // Bytes the reader holds: the index and the partition.
+  uint64_t resident_bytes() const;
+  // Bytes read from the section so far (key frames and Δ records).
+  uint64_t bytes_read() const;
+
+ private:
+  struct Face {
+    CellId neighbour;
+    bool forward;  // the record is stored as this cell → neighbour
+    uint64_t offset;
+    uint32_t bytes;
+  };
+  struct Cell {
+    bool has_vlod = false;
+    uint64_t key_offset = 0;
+    uint32_t key_bytes = 0;
+    std::vector<Face> faces;
+  };
+  std::vector<uint8_t> read(uint64_t offset, uint32_t bytes) const;
+
+  const World& world_;
+  std::unique_ptr<ViewCellPartition> partition_;
+  CellLodRule rule_;
+  PieceTable pieces_;
+  std::vector<Cell> cells_;
+  mutable std::atomic<uint64_t> bytes_read_{0};
+};
+
+}  // namespace cellwalk::visibility

@@ -1,0 +1,250 @@
+// The vlod section: per-face Δs of vLODs and key-cell vLODs (seed 001 §2.3–§2.4, digest 001
+// §3.3–§3.4 and §4 [ours]). Each record is stored in the smallest of the id-set codecs.
+// Layout in docs/format.md, "The vlod section". Run-time code: no Embree, no GL.
+#include "cellwalk/visibility/stored_vlod.hpp"
+
+#include <algorithm>
+#include <deque>
+#include <iterator>
+
+#include "cellwalk/core/error.hpp"
+#include "core/bytes.hpp"
+
+namespace cellwalk::visibility {
+
+namespace {
+
+constexpr uint32_t kVlodVersion = 1;
+constexpr uint8_t kHasVlod = 1;
+
+// Cells within `steps` face steps of `from` over cells with a vLOD (BFS).
+bool key_within(const ViewCellPartition& partition, const std::vector<bool>& has, const std::vector<bool>& key,
+                CellId from, int steps) {
+  std::deque<std::pair<CellId, int>> todo{{from, 0}};
+  std::vector<CellId> seen{from};
+  while (!todo.empty()) {
+    const auto [c, d] = todo.front();
+    todo.pop_front();
+    if (key[c]) return true;
+    if (d == steps) continue;
+    for (CellId n : partition.face_neighbours(c))
+      if (has[n] && std::find(seen.begin(), seen.end(), n) == seen.end()) {
+        seen.push_back(n);
+        todo.push_back({n, d + 1});
+      }
+  }
+  return false;
+}
+
+// The codec that stores `parts` (concatenated records) in the fewest bytes.
+IdCodec smallest(std::initializer_list<std::span<const PieceId>> parts) {
+  IdCodec best = IdCodec::kVarintGaps;
+  uint64_t best_bytes = UINT64_MAX;
+  for (IdCodec c : kIdCodecs) {
+    uint64_t bytes = 0;
+    for (std::span<const PieceId> p : parts) bytes += encoded_size(c, p);
+    if (bytes < best_bytes) best = c, best_bytes = bytes;
+  }
+  return best;
+}
+
+void append_record(std::vector<uint8_t>& out, std::initializer_list<std::span<const PieceId>> parts) {
+  const IdCodec codec = smallest(parts);
+  out.push_back(uint8_t(codec));
+  for (std::span<const PieceId> p : parts) encode_ids(codec, p, out);
+}
+
+IdCodec codec_of(uint8_t tag, const std::string& where) {
+  if (tag >= std::size(kIdCodecs)) fail(where, "unknown id codec " + std::to_string(tag) + " (the file is damaged)");
+  return kIdCodecs[tag];
+}
+
+}  // namespace
+
+PieceTable::PieceTable(const World& world) {
+  first_.reserve(world.object_count());
+  for (ObjectId id = 0; id < world.object_count(); ++id) {
+    first_.push_back(uint32_t(owner_.size()));
+    owner_.insert(owner_.end(), world.object(id).lod_count, id);
+  }
+}
+
+std::vector<PieceId> vlod_pieces(const World& world, const PieceTable& pieces, const ViewCellPartition& partition,
+                                 CellId cell, std::span<const ObjectId> set, const CellLodRule& rule) {
+  std::vector<PieceId> out;
+  out.reserve(set.size());
+  const Aabb& box = partition.cell(cell).box;
+  for (ObjectId id : set) out.push_back(pieces.piece(id, cell_level(world, id, box, rule)));
+  return out;  // ascending: objects ascend and an object's pieces are consecutive
+}
+
+std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
+                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing) {
+  const PieceTable pieces(world);
+  const size_t cells = partition.cell_count();
+  std::vector<std::vector<PieceId>> vlod(cells);
+  std::vector<bool> has(cells, false), key(cells, false);
+  for (const auto& [c, set] : sets) {
+    vlod[c] = vlod_pieces(world, pieces, partition, c, set.objects, rule);
+    has[c] = true;
+    sizes.vlod_ids += vlod[c].size();
+  }
+  for (CellId c = 0; c < cells; ++c)
+    if (has[c] && !key_within(partition, has, key, c, key_spacing)) key[c] = true;
+
+  std::vector<uint8_t> records;
+  struct FaceEntry {
+    CellId neighbour;
+    bool forward;
+    uint64_t offset;
+    uint32_t bytes;
+  };
+  std::vector<std::vector<FaceEntry>> faces(cells);
+  std::vector<std::pair<uint64_t, uint32_t>> key_records(cells, {0, 0});
+  for (CellId c = 0; c < cells; ++c) {
+    if (!has[c]) continue;
+    if (key[c]) {
+      const uint64_t at = records.size();
+      append_record(records, {vlod[c]});
+      key_records[c] = {at, uint32_t(records.size() - at)};
+      sizes.keyframe_bytes += records.size() - at;
+      ++sizes.keyframes;
+    }
+    for (CellId n : partition.face_neighbours(c)) {
+      if (n <= c || !has[n]) continue;
+      VlodDelta d;
+      std::set_difference(vlod[n].begin(), vlod[n].end(), vlod[c].begin(), vlod[c].end(), std::back_inserter(d.added));
+      std::set_difference(vlod[c].begin(), vlod[c].end(), vlod[n].begin(), vlod[n].end(), std::back_inserter(d.removed));
+      const uint64_t at = records.size();
+      append_record(records, {d.added, d.removed});
+      const uint32_t bytes = uint32_t(records.size() - at);
+      faces[c].push_back({n, true, at, bytes});
+      faces[n].push_back({c, false, at, bytes});
+      ++sizes.face_pairs;
+      sizes.delta_ids += d.added.size() + d.removed.size();
+      sizes.delta_bytes += bytes;
+      sizes.bitmask_bytes += 2 * ((pieces.count() + 7) / 8);
+      sizes.list_bytes += 4 * (d.added.size() + d.removed.size());
+      for (size_t i = 0; i < std::size(kIdCodecs); ++i)
+        sizes.codec_bytes[i] += 1 + encoded_size(kIdCodecs[i], d.added) + encoded_size(kIdCodecs[i], d.removed);
+    }
+  }
+  ByteWriter index;
+  index.put_string(to_string(rule));
+  index.put(uint32_t(cells));
+  index.put(uint32_t(pieces.count()));
+  for (CellId c = 0; c < cells; ++c) {
+    index.put(uint8_t(has[c] ? kHasVlod : 0));
+    index.put(key_records[c].first);
+    index.put(key_records[c].second);
+    index.put(uint32_t(faces[c].size()));
+    for (const FaceEntry& f : faces[c]) {
+      index.put(f.neighbour);
+      index.put(uint8_t(f.forward));
+      index.put(f.offset);
+      index.put(f.bytes);
+    }
+  }
+  ByteWriter out;
+  out.put(kVlodVersion);
+  out.put(uint64_t(index.size()));
+  out.put_array(std::span<const uint8_t>(index.bytes()));
+  out.put_array(std::span<const uint8_t>(records));
+  sizes.cells = cells;
+  sizes.section_bytes = out.size();
+  return std::move(out.bytes());
+}
+
+StoredVlod::StoredVlod(const World& world) : world_(world), pieces_(world) {
+  const std::string path = world.file().path();
+  if (!world.file().has_section(kVlodSection) || !world.file().has_section(kCellsSection))
+    fail(path, "has no vLOD sets; run `cellwalk pvs " + path + " --engine vlod` first");
+  partition_ = deserialize_partition(world.file().read_all(kCellsSection), path + " section cells");
+  const SectionInfo& section = world.file().section(kVlodSection);
+  const std::string where = path + " section vlod";
+  if (section.bytes < 12) fail(where, "truncated header (the file is damaged)");
+  const std::vector<uint8_t> head = world.file().read(section, 0, 12);
+  ByteReader h(head, where);
+  if (h.get<uint32_t>("version") != kVlodVersion) h.error("unknown vlod version; rerun `cellwalk pvs --engine vlod`");
+  const uint64_t index_bytes = h.get<uint64_t>("index size");
+  if (index_bytes > section.bytes - 12) h.error("index larger than the section (the file is damaged)");
+  const std::vector<uint8_t> index = world.file().read(section, 12, index_bytes);
+  ByteReader r(index, where, 12);
+  rule_ = parse_cell_lod_rule(r.get_string("rule"), where);
+  const uint32_t cells = r.get<uint32_t>("cell count");
+  if (cells != partition_->cell_count()) r.error("cell count differs from the cells section");
+  if (r.get<uint32_t>("piece count") != pieces_.count()) r.error("piece count differs from the world's level table");
+  const uint64_t records_start = 12 + index_bytes, records_bytes = section.bytes - records_start;
+  cells_.resize(cells);
+  for (CellId c = 0; c < cells; ++c) {
+    Cell& cell = cells_[c];
+    cell.has_vlod = r.get<uint8_t>("flags") & kHasVlod;
+    cell.key_offset = r.get<uint64_t>("key offset");
+    cell.key_bytes = r.get<uint32_t>("key bytes");
+    if (cell.key_offset + cell.key_bytes > records_bytes) r.error("key record past the section's end");
+    const uint32_t count = r.get<uint32_t>("face count");
+    if (count > r.remaining() / 17) r.error("face count larger than the index holds");
+    for (uint32_t i = 0; i < count; ++i) {
+      Face f{r.get<uint32_t>("neighbour"), r.get<uint8_t>("direction") != 0, r.get<uint64_t>("offset"),
+             r.get<uint32_t>("bytes")};
+      if (f.neighbour >= cells || f.offset + f.bytes > records_bytes) r.error("face record out of range");
+      f.offset += records_start;
+      cell.faces.push_back(f);
+    }
+    cell.key_offset += records_start;
+  }
+  if (r.remaining() != 0) r.error("bytes after the index (the file is damaged)");
+}
+
+std::vector<uint8_t> StoredVlod::read(uint64_t offset, uint32_t bytes) const {
+  bytes_read_ += bytes;
+  return world_.file().read(world_.file().section(kVlodSection), offset, bytes);
+}
+
+std::vector<PieceId> StoredVlod::key_vlod(CellId cell) const {
+  const Cell& c = cells_.at(cell);
+  const std::string where = world_.file().path() + " section vlod, key cell " + std::to_string(cell);
+  if (c.key_bytes == 0) fail(where, "is not a key cell");
+  const std::vector<uint8_t> bytes = read(c.key_offset, c.key_bytes);
+  size_t pos = 1;
+  std::vector<PieceId> ids = decode_ids(codec_of(bytes[0], where), bytes, pos, where, pieces_.count());
+  if (pos != bytes.size()) fail(where, "bytes after the record (the file is damaged)");
+  return ids;
+}
+
+std::optional<VlodDelta> StoredVlod::delta(CellId from, CellId to) const {
+  const Cell& c = cells_.at(from);
+  for (const Face& f : c.faces) {
+    if (f.neighbour != to) continue;
+    const std::string where = world_.file().path() + " section vlod, Δ " + std::to_string(from) + "→" + std::to_string(to);
+    const std::vector<uint8_t> bytes = read(f.offset, f.bytes);
+    if (bytes.empty()) fail(where, "empty record (the file is damaged)");
+    const IdCodec codec = codec_of(bytes[0], where);
+    size_t pos = 1;
+    VlodDelta d;
+    d.added = decode_ids(codec, bytes, pos, where, pieces_.count());
+    d.removed = decode_ids(codec, bytes, pos, where, pieces_.count());
+    if (pos != bytes.size()) fail(where, "bytes after the record (the file is damaged)");
+    if (!f.forward) std::swap(d.added, d.removed);
+    return d;
+  }
+  return std::nullopt;
+}
+
+std::vector<CellId> StoredVlod::neighbours(CellId cell) const {
+  std::vector<CellId> out;
+  for (const Face& f : cells_.at(cell).faces) out.push_back(f.neighbour);
+  return out;
+}
+
+uint64_t StoredVlod::resident_bytes() const {
+  uint64_t bytes = cells_.size() * sizeof(Cell) + pieces_.count() * sizeof(ObjectId) +
+                   world_.object_count() * sizeof(uint32_t) +
+                   partition_->cell_count() * (sizeof(ViewCell) + 6 * sizeof(CellId));
+  for (const Cell& c : cells_) bytes += c.faces.capacity() * sizeof(Face);
+  return bytes;
+}
+
+uint64_t StoredVlod::bytes_read() const { return bytes_read_.load(); }
+
+}  // namespace cellwalk::visibility
