@@ -162,8 +162,13 @@ TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
   r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy vlod --width 96 --height 72 -o " + dir_->file("w0"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--engine vlod"), std::string::npos) << r.output;
+  // The world keeps another run's DoVs beside its vLODs: hdov-vsc walks it after vlod's pvs.
+  r = test::run_cellwalk("pvs " + world_ + " --engine dov --cells grid:30 --dov-resolution 16 --points 4 --rays 256");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
   r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:40 --refine 1 --lod-height 72 --lod-aspect 1.3333334");
   ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy hdov-vsc --width 96 --height 72 -o " + dir_->file("w-dov"));
+  EXPECT_EQ(r.exit_code, 0) << r.output;
   r = test::run_cellwalk("compare " + world_ + " --path " + path + " --strategy vlod --every 2 --width 96 --height 72 --json -o " +
                          dir_->file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -218,14 +223,18 @@ TEST_F(VlodCity, OctreeRefinesByTheTrianglesOfTheVlod) {
   EXPECT_GT(deepest, 0u);
 }
 
-// The vLOD of every cell, straight from the stored sets and the rule: the oracle of the Δs.
+// The vLOD of every cell, computed afresh by the engine with the stored rule and the CLI's
+// --refine 1: the oracle of the Δs.
 std::map<CellId, std::vector<visibility::PieceId>> vlods_of(const World& world, const visibility::StoredVlod& stored) {
-  const visibility::StoredPvs pvs(world);
+  EngineOptions options;
+  options.refine_levels = 1;
+  options.lod_rule = stored.rule();
+  const auto engine = make_engine("vlod", world, options);
+  const ViewCellPartition& cells = stored.partition();
   std::map<CellId, std::vector<visibility::PieceId>> out;
-  for (CellId c = 0; c < pvs.partition().cell_count(); ++c)
-    if (pvs.partition().cell(c).computed())
-      if (const auto set = pvs.set(c))
-        out[c] = visibility::vlod_pieces(world, stored.pieces(), pvs.partition(), c, set->objects, stored.rule());
+  for (CellId c = 0; c < cells.cell_count(); ++c)
+    if (cells.cell(c).computed())
+      out[c] = visibility::vlod_pieces(world, stored.pieces(), cells, c, engine->compute(cells.cell(c)).objects, stored.rule());
   return out;
 }
 

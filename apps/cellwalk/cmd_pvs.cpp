@@ -169,18 +169,16 @@ void print_vlod_sizes(const visibility::VlodSizes& s) {
   std::printf(" bytes\n");
 }
 
-// Writes the sets into `out`; a vlod run's section of per-face Δs and key cells goes with them.
+// Writes the sets into `out`: a vlod run as the vlod section of per-face Δs and key cells (the
+// world's other visible sets stay), any other run as the cells, pvs and dov sections.
 visibility::PvsSizes write_sets(const World& world, const std::string& out, const ViewCellPartition& partition,
                                 const visibility::CellSets& sets, const visibility::PvsRun& run,
                                 std::optional<visibility::VlodSizes>& vlod) {
-  std::vector<visibility::ExtraSection> extra;
   const std::string prefix = "vlod:";
-  if (run.engine.rfind(prefix, 0) == 0) {
-    const visibility::CellLodRule rule = visibility::parse_cell_lod_rule(run.engine.substr(prefix.size()), "pvs run");
-    vlod.emplace();
-    extra.push_back({visibility::kVlodSection, visibility::encode_vlod_section(world, partition, sets, rule, *vlod)});
-  }
-  return visibility::write_world_with_pvs(world, out, partition, sets, run, extra);
+  if (run.engine.rfind(prefix, 0) != 0) return visibility::write_world_with_pvs(world, out, partition, sets, run);
+  const visibility::CellLodRule rule = visibility::parse_cell_lod_rule(run.engine.substr(prefix.size()), "pvs run");
+  vlod = visibility::write_world_with_vlod(world, out, partition, sets, rule);
+  return {};
 }
 
 void run_merge(const Args& a, const World& world) {
@@ -190,14 +188,15 @@ void run_merge(const Args& a, const World& world) {
   std::optional<visibility::VlodSizes> vlod;
   const visibility::PvsSizes sizes = write_sets(world, out, *merged.partition, merged.sets, merged.run, vlod);
   if (a.json) {
-    nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}, {"sizes", sizes_json(sizes)}};
+    nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
+    else j["sizes"] = sizes_json(sizes);
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
   std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
-  print_sizes(sizes);
   if (vlod) print_vlod_sizes(*vlod);
+  else print_sizes(sizes);
 }
 
 // The cells spec's partition, restricted to the cells along the --along path when one is given.
@@ -258,8 +257,8 @@ void run_compute(const Args& a, const World& world) {
                                 {"solid_cells", solid}, {"skipped_cells", skipped}, {"shard", run.shard}, {"shards", run.shards},
                                 {"computed", computed}, {"resumed", resumed}, {"setup_seconds", setup_s},
                                 {"seconds", compute_s}, {"cells_per_second", rate}};
-    if (!sharded) j["sizes"] = sizes_json(sizes);
     if (vlod) j["vlod"] = vlod_json(*vlod);
+    else if (!sharded) j["sizes"] = sizes_json(sizes);
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
@@ -267,8 +266,8 @@ void run_compute(const Args& a, const World& world) {
               "%.2f cells/s; setup %.1f s\n",
               engine->name().c_str(), partition->cell_count(), partition->kind().c_str(), (unsigned long long)solid,
               (unsigned long long)skipped, (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
-  if (!sharded) print_sizes(sizes);
   if (vlod) print_vlod_sizes(*vlod);
+  else if (!sharded) print_sizes(sizes);
   std::printf("  wrote %s\n", out.c_str());
 }
 

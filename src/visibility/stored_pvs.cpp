@@ -93,39 +93,44 @@ std::vector<uint8_t> encode_pvs_section(const ViewCellPartition& partition, cons
   return std::move(w.bytes());
 }
 
-void write_section(WorldWriter& w, const char* name, std::span<const uint8_t> bytes) {
-  w.begin_section(name);
-  w.write(bytes);
-  w.end_section();
-}
-
 }  // namespace
 
 PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
-                              const CellSets& sets, const PvsRun& run, const std::vector<ExtraSection>& extra) {
+                              const CellSets& sets, const PvsRun& run) {
   for (CellId c = 0; c < partition.cell_count(); ++c)
     if (partition.cell(c).computed() && !sets.count(c))
       fail("pvs", "cell " + std::to_string(c) + " has no visible set; compute or merge every shard first");
   PvsSizes sizes;
-  const std::vector<uint8_t> pvs = encode_pvs_section(partition, sets, world.object_count(), run, sizes);
-  const bool with_dov = !sets.empty() && !sets.begin()->second.dov.empty();
-  const std::vector<uint8_t> dov = with_dov ? encode_dov_section(partition, sets) : std::vector<uint8_t>{};
-  sizes.dov_bytes = dov.size();
+  std::vector<NamedSection> sections{{kCellsSection, serialize_partition(partition)},
+                                     {kPvsSection, encode_pvs_section(partition, sets, world.object_count(), run, sizes)}};
+  if (!sets.empty() && !sets.begin()->second.dov.empty()) {
+    sections.push_back({kDovSection, encode_dov_section(partition, sets)});
+    sizes.dov_bytes = sections.back().bytes.size();
+  }
+  write_world_sections(world, out, sections, {kCellsSection, kPvsSection, kDovSection});
+  return sizes;
+}
+
+void write_world_sections(const World& world, const std::string& out, const std::vector<NamedSection>& sections,
+                          const std::vector<std::string>& drop) {
+  auto named = [&](const std::string& name) {
+    return std::find(drop.begin(), drop.end(), name) != drop.end() ||
+           std::any_of(sections.begin(), sections.end(), [&](const NamedSection& s) { return s.name == name; });
+  };
   WorldWriter w(out, world.file().page_size());
   constexpr uint64_t kChunk = 1 << 20;
   for (const SectionInfo& s : world.file().sections()) {
-    if (s.name == kCellsSection || s.name == kPvsSection || s.name == kDovSection) continue;
-    if (std::any_of(extra.begin(), extra.end(), [&](const ExtraSection& e) { return e.name == s.name; })) continue;
+    if (named(s.name)) continue;
     w.begin_section(s.name);
     for (uint64_t at = 0; at < s.bytes; at += kChunk) w.write(world.file().read(s, at, std::min(kChunk, s.bytes - at)));
     w.end_section();
   }
-  write_section(w, kCellsSection, serialize_partition(partition));
-  write_section(w, kPvsSection, pvs);
-  if (with_dov) write_section(w, kDovSection, dov);
-  for (const ExtraSection& e : extra) write_section(w, e.name.c_str(), e.bytes);
+  for (const NamedSection& s : sections) {
+    w.begin_section(s.name);
+    w.write(s.bytes);
+    w.end_section();
+  }
   w.finish();
-  return sizes;
 }
 
 StoredPvs::StoredPvs(const World& world) : object_count_(world.object_count()) {

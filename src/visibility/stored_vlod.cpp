@@ -130,6 +130,9 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
     }
   }
   ByteWriter index;
+  const std::vector<uint8_t> cells_bytes = serialize_partition(partition);
+  index.put(uint64_t(cells_bytes.size()));
+  index.put_array(std::span<const uint8_t>(cells_bytes));
   index.put_string(to_string(rule));
   index.put(uint32_t(cells));
   index.put(uint32_t(pieces.count()));
@@ -155,11 +158,20 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
   return std::move(out.bytes());
 }
 
+VlodSizes write_world_with_vlod(const World& world, const std::string& out, const ViewCellPartition& partition,
+                                const CellSets& sets, const CellLodRule& rule) {
+  for (CellId c = 0; c < partition.cell_count(); ++c)
+    if (partition.cell(c).computed() && !sets.count(c))
+      fail("pvs", "cell " + std::to_string(c) + " has no vLOD; compute or merge every shard first");
+  VlodSizes sizes;
+  write_world_sections(world, out, {{kVlodSection, encode_vlod_section(world, partition, sets, rule, sizes)}});
+  return sizes;
+}
+
 StoredVlod::StoredVlod(const World& world) : world_(world), pieces_(world) {
   const std::string path = world.file().path();
-  if (!world.file().has_section(kVlodSection) || !world.file().has_section(kCellsSection))
+  if (!world.file().has_section(kVlodSection))
     fail(path, "has no vLOD sets; run `cellwalk pvs " + path + " --engine vlod` first");
-  partition_ = deserialize_partition(world.file().read_all(kCellsSection), path + " section cells");
   const SectionInfo& section = world.file().section(kVlodSection);
   const std::string where = path + " section vlod";
   if (section.bytes < 12) fail(where, "truncated header (the file is damaged)");
@@ -170,9 +182,11 @@ StoredVlod::StoredVlod(const World& world) : world_(world), pieces_(world) {
   if (index_bytes > section.bytes - 12) h.error("index larger than the section (the file is damaged)");
   const std::vector<uint8_t> index = world.file().read(section, 12, index_bytes);
   ByteReader r(index, where, 12);
+  const std::vector<uint8_t> cells_bytes = r.get_array<uint8_t>(r.get<uint64_t>("cells size"), "cells");
+  partition_ = deserialize_partition(cells_bytes, where + " cells");
   rule_ = parse_cell_lod_rule(r.get_string("rule"), where);
   const uint32_t cells = r.get<uint32_t>("cell count");
-  if (cells != partition_->cell_count()) r.error("cell count differs from the cells section");
+  if (cells != partition_->cell_count()) r.error("cell count differs from the partition's");
   if (r.get<uint32_t>("piece count") != pieces_.count()) r.error("piece count differs from the world's level table");
   const uint64_t records_start = 12 + index_bytes, records_bytes = section.bytes - records_start;
   cells_.resize(cells);

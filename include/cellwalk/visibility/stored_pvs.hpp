@@ -47,18 +47,21 @@ struct PvsSizes {
   uint64_t dov_bytes = 0;
 };
 
-// A section that goes with the sets (e.g. "vlod"), written after them.
-struct ExtraSection {
+// Writes `out`: every section of `world` except old visibility sections, then "cells", "pvs"
+// and, if the sets carry DoVs, "dov". Atomic: nothing appears at `out` until it is complete, so
+// `out` may be the world's own path. REQUIRES: every cell that is neither solid nor skipped
+// has a set.
+PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
+                              const CellSets& sets, const PvsRun& run);
+
+struct NamedSection {
   std::string name;
   std::vector<uint8_t> bytes;
 };
-
-// Writes `out`: every section of `world` except old visibility sections (and old sections named
-// like `extra`), then "cells", "pvs", "dov" if the sets carry DoVs, and `extra`. Atomic: nothing
-// appears at `out` until it is complete, so `out` may be the world's own path. REQUIRES: every
-// cell that is neither solid nor skipped has a set.
-PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
-                              const CellSets& sets, const PvsRun& run, const std::vector<ExtraSection>& extra = {});
+// Writes `out`: every section of `world` but those named in `drop` or in `sections`, then
+// `sections`. Atomic, as above.
+void write_world_sections(const World& world, const std::string& out, const std::vector<NamedSection>& sections,
+                          const std::vector<std::string>& drop = {});
 
 // Reads the visibility sections of a world. Thread-safety: const methods may be called
 // concurrently.

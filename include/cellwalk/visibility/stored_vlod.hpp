@@ -61,12 +61,18 @@ struct VlodSizes {
   uint64_t section_bytes = 0;
 };
 
-// Encodes the section from the run's sets (the pvs section's, a vlod engine's). Key cells: in
-// id order, a cell with a vLOD and no key cell within `key_spacing` face steps becomes one.
+// Encodes the section, its own partition included, from a vlod engine's sets. Key cells: in id
+// order, a cell with a vLOD and no key cell within `key_spacing` face steps becomes one.
 std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
                                          const CellLodRule& rule, VlodSizes& sizes, int key_spacing = 3);
 
-// Reads the section's index (per cell: key frame and the Δ records of its faces) and reads each
+// Writes `out`: `world` with its vlod section replaced by the one of these sets, every other
+// section (the cells, pvs and dov of another run too) kept, so one world serves vlod beside the
+// strategies that read DoVs. Atomic. REQUIRES: every computed cell has a set.
+VlodSizes write_world_with_vlod(const World& world, const std::string& out, const ViewCellPartition& partition,
+                                const CellSets& sets, const CellLodRule& rule);
+
+// Reads the section's index (its cells; per cell: key frame and the Δ records of its faces) and reads each
 // record from the file when asked. Thread-safety: const methods may be called concurrently.
 class StoredVlod {
  public:
