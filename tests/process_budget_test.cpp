@@ -20,7 +20,7 @@ namespace {
 constexpr double kBudgetMib = 32;
 
 // A lattice of side × side Stanford bunnies (75k triangles each, ~2 MB decoded: the budget binds
-// at once), with degrees of visibility and its HDoV-tree, so every strategy can walk it.
+// at once), with degrees of visibility, its HDoV-tree and its vLODs, so every strategy can walk it.
 struct BudgetWorld {
   std::string world, path;
 };
@@ -33,6 +33,7 @@ BudgetWorld make_world(const test::TempDir& dir, int side) {
         "build " + name + ".cwscene -o " + name + ".cww",
         "pvs " + name + ".cww --engine dov --cells grid:200 --dov-resolution 16",
         "visual-build " + name + ".cww",
+        "pvs " + name + ".cww --engine vlod --cells grid:200 --refine 1 --lod-height 120",
         "path " + name + ".cww --frames 40 --seed 2 -o " + name + ".path"}) {
     const test::CommandResult r = test::run_cellwalk(command);
     EXPECT_EQ(r.exit_code, 0) << command << "\n" << r.output;
@@ -67,7 +68,7 @@ TEST(ProcessBudget, EveryStrategyHoldsTheProcessWithinBudgetAndBaseline) {
   test::TempDir dir;
   for (int side : {2, 5}) {
     const BudgetWorld w = make_world(dir, side);
-    for (const std::string strategy : {"brute", "conv", "hdov-vsc", "hdov-pb", "review", "visual", "visual:maxdov=1e-9"}) {
+    for (const std::string strategy : {"brute", "conv", "hdov-vsc", "hdov-pb", "review", "visual", "visual:maxdov=1e-9", "vlod"}) {
       SCOPED_TRACE(strategy + " on " + std::to_string(side) + "² bunnies");
       const Measured m = walk(dir, w, strategy, kBudgetMib);
       if (!m.summary.is_object()) continue;
