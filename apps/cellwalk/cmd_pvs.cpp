@@ -149,7 +149,7 @@ nlohmann::ordered_json vlod_json(const visibility::VlodSizes& s) {
   nlohmann::ordered_json codecs;
   for (size_t i = 0; i < std::size(visibility::kIdCodecs); ++i)
     codecs[visibility::id_codec_name(visibility::kIdCodecs[i])] = s.codec_bytes[i];
-  return {{"cells", s.cells},         {"key_cells", s.keyframes},        {"face_pairs", s.face_pairs},
+  return {{"cells", s.cells},         {"cells_with_vlod", s.cells_with_vlod}, {"key_cells", s.keyframes},        {"face_pairs", s.face_pairs},
           {"delta_ids", s.delta_ids}, {"vlod_ids", s.vlod_ids},          {"bitmask_bytes", s.bitmask_bytes},
           {"list_bytes", s.list_bytes}, {"codec_bytes", codecs},         {"delta_bytes", s.delta_bytes},
           {"key_bytes", s.keyframe_bytes}, {"section_bytes", s.section_bytes}};
@@ -159,7 +159,7 @@ void print_vlod_sizes(const visibility::VlodSizes& s) {
   std::printf("  vlod section: %llu face Δs, %.1f ids each (%.1f%% of a vLOD), %llu key cells; Δs %llu bytes as stored "
               "(smallest codec per Δ) vs %llu as 32-bit ids vs %llu as bitmasks (%.0fx smaller)\n",
               (unsigned long long)s.face_pairs, double(s.delta_ids) / double(std::max<uint64_t>(s.face_pairs, 1)),
-              100.0 * double(s.delta_ids) * double(std::max<uint64_t>(s.cells, 1)) /
+              100.0 * double(s.delta_ids) * double(std::max<uint64_t>(s.cells_with_vlod, 1)) /
                   double(std::max<uint64_t>(s.face_pairs, 1)) / double(std::max<uint64_t>(s.vlod_ids, 1)),
               (unsigned long long)s.keyframes, (unsigned long long)s.delta_bytes, (unsigned long long)s.list_bytes,
               (unsigned long long)s.bitmask_bytes, double(s.bitmask_bytes) / double(std::max<uint64_t>(s.delta_bytes, 1)));

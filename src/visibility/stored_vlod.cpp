@@ -88,6 +88,7 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
     vlod[c] = vlod_pieces(world, pieces, partition, c, set.objects, rule);
     has[c] = true;
     sizes.vlod_ids += vlod[c].size();
+    ++sizes.cells_with_vlod;
   }
   for (CellId c = 0; c < cells; ++c)
     if (has[c] && !key_within(partition, has, key, c, key_spacing)) key[c] = true;

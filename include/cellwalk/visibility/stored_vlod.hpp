@@ -51,7 +51,7 @@ struct VlodDelta {
 
 // What the section costs, beside the forms vLOD §2.4 compares it with.
 struct VlodSizes {
-  uint64_t cells = 0, keyframes = 0, face_pairs = 0;
+  uint64_t cells = 0, cells_with_vlod = 0, keyframes = 0, face_pairs = 0;
   uint64_t delta_ids = 0, vlod_ids = 0;     // Σ |A| + |R| over the pairs; Σ |vLOD| over the cells
   uint64_t bitmask_bytes = 0;                // each Δ as two bitmasks over every piece
   uint64_t list_bytes = 0;                   // each Δ as plain 32-bit ids
