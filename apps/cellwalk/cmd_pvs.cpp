@@ -152,7 +152,8 @@ nlohmann::ordered_json vlod_json(const visibility::VlodSizes& s) {
   return {{"cells", s.cells},         {"cells_with_vlod", s.cells_with_vlod}, {"key_cells", s.keyframes},        {"face_pairs", s.face_pairs},
           {"delta_ids", s.delta_ids}, {"vlod_ids", s.vlod_ids},          {"bitmask_bytes", s.bitmask_bytes},
           {"list_bytes", s.list_bytes}, {"codec_bytes", codecs},         {"delta_bytes", s.delta_bytes},
-          {"key_bytes", s.keyframe_bytes}, {"section_bytes", s.section_bytes}};
+          {"key_bytes", s.keyframe_bytes}, {"section_bytes", s.section_bytes},
+          {"runs_world_order", s.runs_world_order}, {"runs_tsp_order", s.runs_tsp_order}};
 }
 
 void print_vlod_sizes(const visibility::VlodSizes& s) {
@@ -163,6 +164,9 @@ void print_vlod_sizes(const visibility::VlodSizes& s) {
                   double(std::max<uint64_t>(s.face_pairs, 1)) / double(std::max<uint64_t>(s.vlod_ids, 1)),
               (unsigned long long)s.keyframes, (unsigned long long)s.delta_bytes, (unsigned long long)s.list_bytes,
               (unsigned long long)s.bitmask_bytes, double(s.bitmask_bytes) / double(std::max<uint64_t>(s.delta_bytes, 1)));
+  std::printf("   runs of added pieces R(M) (seed §3): world order %llu, Hamming-TSP order %llu (%.2fx fewer)\n",
+              (unsigned long long)s.runs_world_order, (unsigned long long)s.runs_tsp_order,
+              double(s.runs_world_order) / double(std::max<uint64_t>(s.runs_tsp_order, 1)));
   std::printf("   one codec for every Δ:");
   for (size_t i = 0; i < std::size(visibility::kIdCodecs); ++i)
     std::printf(" %s %llu", visibility::id_codec_name(visibility::kIdCodecs[i]).c_str(), (unsigned long long)s.codec_bytes[i]);

@@ -8,6 +8,7 @@
 #include <iterator>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/visibility/disk_order.hpp"
 #include "core/bytes.hpp"
 
 namespace cellwalk::visibility {
@@ -59,6 +60,18 @@ IdCodec codec_of(uint8_t tag, const std::string& where) {
   return kIdCodecs[tag];
 }
 
+// R(M) of the crossings' additions in the world's piece order and in the TSP order (bounded to
+// seconds: a report, not the layout, which applying the order to the world will be).
+void measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, uint32_t pieces, VlodSizes& sizes) {
+  const std::vector<uint32_t> identity = identity_order(pieces);
+  sizes.runs_world_order = total_runs(rows, identity);
+  DiskOrderOptions options;
+  options.max_iterations = 2000;
+  options.max_seconds = 5;
+  const std::vector<uint32_t> order = disk_order(columns_from_rows(rows, pieces), identity, options);
+  sizes.runs_tsp_order = total_runs(rows, order);
+}
+
 }  // namespace
 
 PieceTable::PieceTable(const World& world) {
@@ -93,6 +106,7 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
   for (CellId c = 0; c < cells; ++c)
     if (has[c] && !key_within(partition, has, key, c, key_spacing)) key[c] = true;
 
+  std::vector<std::vector<uint32_t>> added_rows;  // §3's matrix: what each crossing adds
   std::vector<uint8_t> records;
   struct FaceEntry {
     CellId neighbour;
@@ -128,8 +142,11 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
       sizes.list_bytes += 4 * (d.added.size() + d.removed.size());
       for (size_t i = 0; i < std::size(kIdCodecs); ++i)
         sizes.codec_bytes[i] += 1 + encoded_size(kIdCodecs[i], d.added) + encoded_size(kIdCodecs[i], d.removed);
+      for (std::vector<PieceId>* row : {&d.added, &d.removed})
+        if (!row->empty()) added_rows.push_back(std::move(*row));
     }
   }
+  measure_disk_order(added_rows, uint32_t(pieces.count()), sizes);
   ByteWriter index;
   const std::vector<uint8_t> cells_bytes = serialize_partition(partition);
   index.put(uint64_t(cells_bytes.size()));
