@@ -306,5 +306,25 @@ TEST_F(VlodCity, TheRunTimeVlodIsTheCellsOwnAfterAnyMove) {
   EXPECT_GT(strategy.counters().crossings, strategy.counters().cell_changes) << "no move crossed intermediate cells";
 }
 
+// Precompute at scale: two shards merged give the section one run gives, byte for byte.
+TEST_F(VlodCity, ShardsMergeIntoTheSectionOfOneRun) {
+  const std::string spec = " --engine vlod --cells grid:30 --refine 1 --lod-height 72";
+  const std::string whole = dir_->file("whole.cww"), merged = dir_->file("merged.cww");
+  auto r = test::run_cellwalk("pvs " + world_ + spec + " -o " + whole);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::string parts;
+  for (const char* shard : {"0/2", "1/2"}) {
+    const std::string part = dir_->file(std::string("part") + shard[0]);
+    r = test::run_cellwalk("pvs " + world_ + spec + " --shard " + shard + " -o " + part);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    parts += " " + part;
+  }
+  r = test::run_cellwalk("pvs " + world_ + " --merge" + parts + " -o " + merged);
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("vlod section"), std::string::npos) << r.output;
+  const World a(whole), b(merged);
+  EXPECT_EQ(a.file().read_all(visibility::kVlodSection), b.file().read_all(visibility::kVlodSection));
+}
+
 }  // namespace
 }  // namespace cellwalk
