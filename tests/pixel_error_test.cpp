@@ -159,6 +159,11 @@ TEST(PixelError, DistancesAndStatsMatchBruteForce) {
       EXPECT_EQ(stats.max_px,
                 finite.empty() ? 0.0 : *std::max_element(finite.begin(), finite.end()));
       EXPECT_EQ(stats.p999_px, oracle_p999(finite));
+      // The worst pixel is the first at the maximum, or none when nothing differs.
+      const auto worst = std::find_if(expected.begin(), expected.end(), [&](double d) {
+        return d > 0 && !std::isinf(d) && d == stats.max_px;
+      });
+      EXPECT_EQ(stats.worst_pixel, worst == expected.end() ? -1 : worst - expected.begin());
     }
   }
 }
@@ -255,6 +260,7 @@ TEST(PixelError, AMissingObjectIsUnmatchedNotFinite) {
     const FidelityFrame f =
         compare_images(blank_color(80, 60), truth, blank_color(80, 60), test, nullptr);
     EXPECT_EQ(f.missed_objects, missing ? 1u : 0u);
+    EXPECT_EQ(f.missed_ids, missing ? std::vector<uint32_t>{2} : std::vector<uint32_t>{});
     EXPECT_EQ((missing ? f.truth_to_test : f.test_to_truth).unmatched, uint64_t(lone.area()));
   }
 }

@@ -33,6 +33,27 @@ class DroppingStrategy : public BruteStrategy {
   ObjectId dropped_;
 };
 
+// Faulty the other way: selects the object but gives it no triangles, as a level whose
+// silhouette fell between pixel centres would draw nothing. The item names a level truth never
+// draws, so the renderer's cache cannot answer for it.
+class HidingStrategy : public BruteStrategy {
+ public:
+  HidingStrategy(const World& world, ObjectId hidden) : BruteStrategy(world, {}, true), hidden_(hidden) {}
+  std::string name() const override { return "hiding"; }
+  void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override {
+    BruteStrategy::select(camera, items, stats);
+    for (DrawItem& i : items)
+      if (i.id == hidden_) i.lod = 1000;
+  }
+  const Mesh* mesh(const DrawItem& item, FrameStats& stats) override {
+    return item.id == hidden_ ? &empty_ : BruteStrategy::mesh(item, stats);
+  }
+
+ private:
+  ObjectId hidden_;
+  Mesh empty_;
+};
+
 class WalkTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -84,8 +105,17 @@ TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
   DroppingStrategy dropping(*world_, biggest->first - 1);
   CompareOptions options;
   options.every = 5;
-  FidelitySummary s = summarize(compare(path_, lens_, dropping, truth, *renderer_, options));
+  const std::vector<FidelityFrame> frames = compare(path_, lens_, dropping, truth, *renderer_, options);
+  FidelitySummary s = summarize(frames);
   EXPECT_GT(s.missed_objects, 0u);
+  EXPECT_EQ(s.missed_drawn, 0u);  // it was left out, not drawn
+  for (const FidelityFrame& f : frames)
+    for (uint32_t id : f.missed_ids) EXPECT_EQ(id, biggest->first);
+  // The same object drawn with nothing to show is missed as often, and counted as drawn.
+  HidingStrategy hiding(*world_, biggest->first - 1);
+  const FidelitySummary h = summarize(compare(path_, lens_, hiding, truth, *renderer_, options));
+  EXPECT_EQ(h.missed_objects, s.missed_objects);
+  EXPECT_EQ(h.missed_drawn, h.missed_objects);
   // Each miss is an object truth shows and the test nowhere: its pixels have no match.
   EXPECT_GE(s.unmatched_truth_pixels, s.missed_objects);
   EXPECT_LT(s.recall, 1.0);

@@ -1,6 +1,7 @@
 // Fidelity against ground truth: differing pixels, PSNR, visible objects missed, the pixel
 // error (issue 14, src/metrics/pixel_error.cpp), and the stratified-rendering thesis's
 // difference images (difference + 128).
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -45,11 +46,26 @@ FidelityFrame compare_images(const Image& truth, const IdImage& truth_ids, const
   std::unordered_set<uint32_t> seen_test(test_ids.ids.begin(), test_ids.ids.end());
   seen_truth.erase(kBackgroundId);
   f.visible_objects = seen_truth.size();
-  for (uint32_t id : seen_truth) f.missed_objects += seen_test.count(id) ? 0 : 1;
+  for (uint32_t id : seen_truth)
+    if (!seen_test.count(id)) f.missed_ids.push_back(id);
+  std::sort(f.missed_ids.begin(), f.missed_ids.end());
+  f.missed_objects = f.missed_ids.size();
+  f.width = truth.width;
   f.test_to_truth = pixel_error(test_ids, truth_ids);
   f.truth_to_test = pixel_error(truth_ids, test_ids);
   return f;
 }
+
+namespace {
+
+// How many of `pixel_ids` belong to items of `drawn`.
+uint64_t count_drawn(const std::vector<uint32_t>& pixel_ids, const std::vector<DrawItem>& drawn) {
+  std::unordered_set<uint32_t> ids;
+  for (const DrawItem& item : drawn) ids.insert(pixel_id(item));
+  return uint64_t(std::count_if(pixel_ids.begin(), pixel_ids.end(), [&](uint32_t id) { return ids.count(id) > 0; }));
+}
+
+}  // namespace
 
 std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, Strategy& strategy,
                                    Strategy& truth, Renderer& renderer,
@@ -64,11 +80,13 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
     render_frame(truth, renderer, camera);
     Image truth_color = renderer.read_color();
     IdImage truth_ids = renderer.read_ids();
-    render_frame(strategy, renderer, camera, path.frames[i].time);
+    std::vector<DrawItem> drawn;
+    render_frame(strategy, renderer, camera, path.frames[i].time, &drawn);
     Image test_color = renderer.read_color();
     IdImage test_ids = renderer.read_ids();
     Image diff;
     FidelityFrame f = compare_images(truth_color, truth_ids, test_color, test_ids, &diff);
+    f.missed_drawn = count_drawn(f.missed_ids, drawn);
     f.frame = static_cast<int>(i);
     frames.push_back(f);
     if (!options.image_dir.empty() && images < options.max_images) {
@@ -95,6 +113,7 @@ FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
     s.max_differing_fraction = std::max(s.max_differing_fraction, f.differing_fraction);
     s.visible_objects += f.visible_objects;
     s.missed_objects += f.missed_objects;
+    s.missed_drawn += f.missed_drawn;
     if (std::isfinite(f.psnr_db)) mse_sum += kPeak / std::pow(10.0, f.psnr_db / 10.0);
     s.max_pixel_error_px = std::max(s.max_pixel_error_px, f.pixel_error_max_px());
     s.max_pixel_error_p999_px = std::max(s.max_pixel_error_p999_px, f.pixel_error_p999_px());
@@ -118,16 +137,28 @@ void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::str
   std::ostringstream out;
   out << "frame,differing_fraction,psnr_db,visible_objects,missed_objects,"
          "test_to_truth_max_px,test_to_truth_p999_px,test_to_truth_unmatched,"
-         "truth_to_test_max_px,truth_to_test_p999_px,truth_to_test_unmatched\n";
+         "truth_to_test_max_px,truth_to_test_p999_px,truth_to_test_unmatched,"
+         "worst_x,worst_y,missed_object_ids\n";
   out.precision(6);
   auto write_pixel_error = [&out](const PixelErrorStats& e) {
     out << ',' << e.max_px << ',' << e.p999_px << ',' << e.unmatched;
   };
   for (const FidelityFrame& f : frames) {
     out << f.frame << ',' << f.differing_fraction << ',' << f.psnr_db << ',' << f.visible_objects << ','
-        << f.missed_objects;
+        << f.missed_objects << ',' << f.missed_drawn;
     write_pixel_error(f.test_to_truth);
     write_pixel_error(f.truth_to_test);
+    // Where the frame's pixel error is largest (the worse direction), and which objects it
+    // missed: what to look at in the frame's images.
+    const PixelErrorStats& worse =
+        f.test_to_truth.max_px >= f.truth_to_test.max_px ? f.test_to_truth : f.truth_to_test;
+    if (worse.worst_pixel >= 0 && f.width > 0)
+      out << ',' << worse.worst_pixel % f.width << ',' << worse.worst_pixel / f.width;
+    else
+      out << ",,";
+    out << ',';
+    // Truth draws objects only, whose pixel id is the object's id + 1.
+    for (size_t i = 0; i < f.missed_ids.size(); ++i) out << (i ? " " : "") << f.missed_ids[i] - 1;
     out << '\n';
   }
   write_file_atomically(file, out.str());
@@ -142,6 +173,7 @@ std::string to_json(const FidelitySummary& s) {
                               {"mean_psnr_db", number(s.mean_psnr_db)},
                               {"visible_objects", s.visible_objects},
                               {"missed_objects", s.missed_objects},
+                              {"missed_drawn", s.missed_drawn},
                               {"recall", s.recall},
                               {"pixel_error",
                                {{"max_px", s.max_pixel_error_px},

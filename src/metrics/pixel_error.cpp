@@ -131,13 +131,17 @@ std::vector<double> pixel_distances(const IdImage& shown, const IdImage& referen
 PixelErrorStats pixel_error_stats(const std::vector<double>& distances) {
   PixelErrorStats s;
   std::vector<double> finite;
-  for (double d : distances) {
+  for (size_t p = 0; p < distances.size(); ++p) {
+    const double d = distances[p];
     if (d == 0.0) continue;
     if (std::isinf(d)) {
       ++s.unmatched;
     } else {
       finite.push_back(d);
-      s.max_px = std::max(s.max_px, d);
+      if (d > s.max_px) {
+        s.max_px = d;
+        s.worst_pixel = int64_t(p);
+      }
     }
   }
   s.p999_px = percentile(finite, 99.9);

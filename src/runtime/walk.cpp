@@ -5,7 +5,8 @@
 
 namespace cellwalk {
 
-FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time) {
+FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time,
+                        std::vector<DrawItem>* drawn) {
   FrameStats stats;
   stats.time = time;
   Stopwatch frame_watch;
@@ -30,6 +31,7 @@ FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& ca
   stats.resident_bytes = strategy.resident_bytes();
   stats.gpu_bytes = rs.gpu_resident_bytes;
   stats.frame_ms = frame_watch.ms();
+  if (drawn) *drawn = std::move(items);
   return stats;
 }
 

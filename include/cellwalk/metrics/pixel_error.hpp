@@ -49,6 +49,7 @@ struct PixelErrorStats {
   double max_px = 0.0;     // largest finite d(p); 0 when no pixel differs
   double p999_px = 0.0;    // 99.9th percentile (nearest rank) of the finite d(p); 0 when none
   uint64_t unmatched = 0;  // pixels with d(p) infinite, left out of both figures above
+  int64_t worst_pixel = -1;  // index y * width + x of the first pixel at max_px; -1 when none
 };
 
 PixelErrorStats pixel_error_stats(const std::vector<double>& distances);

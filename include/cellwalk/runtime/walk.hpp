@@ -18,7 +18,9 @@ using ProgressFn = std::function<void(size_t, size_t)>;
 
 // Renders one frame of `strategy` from `camera` and returns its statistics. `time` (the path
 // time, seconds) is in stats.time when select() runs, so a strategy can measure velocity.
-FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time = 0.0);
+// With `drawn`, it receives the items the strategy selected (what compare checks misses against).
+FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time = 0.0,
+                        std::vector<DrawItem>* drawn = nullptr);
 
 // Replays every frame of `path`. The camera's lens (fov, aspect, near, far) comes from `lens`.
 std::vector<FrameStats> walk(const CameraPath& path, const Camera& lens, Strategy& strategy,
