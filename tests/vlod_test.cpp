@@ -304,6 +304,8 @@ TEST_F(VlodCity, TheRunTimeVlodIsTheCellsOwnAfterAnyMove) {
   }
   EXPECT_GT(strategy.counters().cell_changes, 20u);
   EXPECT_GT(strategy.counters().crossings, strategy.counters().cell_changes) << "no move crossed intermediate cells";
+  // Every change read a record or more (a key frame or Δs), each at least a byte.
+  EXPECT_GE(strategy.counters().section_bytes_read, strategy.counters().cell_changes);
 }
 
 // Precompute at scale: two shards merged give the section one run gives, byte for byte.

@@ -122,6 +122,31 @@ TEST_F(WalkTest, DroppedVisibleObjectIsCaught) {
   EXPECT_GT(s.max_differing_fraction, 0.0);
 }
 
+// Side by side against one truth per frame, each strategy's frames are what compare() gives it
+// alone.
+TEST_F(WalkTest, SideBySideMatchesEachAlone) {
+  BruteStrategy truth(*world_, {}, false), brute(*world_, {}, true);
+  DroppingStrategy dropping(*world_, 3);
+  HidingStrategy hiding(*world_, 5);
+  CompareOptions options;
+  options.every = 7;
+  Strategy* const all[] = {&brute, &dropping, &hiding};
+  const auto together = compare_side_by_side(path_, lens_, all, truth, *renderer_, options);
+  ASSERT_EQ(together.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    const std::vector<FidelityFrame> alone = compare(path_, lens_, *all[k], truth, *renderer_, options);
+    ASSERT_EQ(together[k].size(), alone.size());
+    for (size_t i = 0; i < alone.size(); ++i) {
+      EXPECT_EQ(together[k][i].frame, alone[i].frame);
+      EXPECT_EQ(together[k][i].differing_fraction, alone[i].differing_fraction);
+      EXPECT_EQ(together[k][i].missed_ids, alone[i].missed_ids);
+      EXPECT_EQ(together[k][i].missed_drawn, alone[i].missed_drawn);
+      EXPECT_EQ(together[k][i].pixel_error_max_px(), alone[i].pixel_error_max_px());
+    }
+  }
+  EXPECT_GT(summarize(together[1]).missed_objects + summarize(together[2]).missed_objects, 0u);
+}
+
 TEST_F(WalkTest, WalkMeasuresEveryFrame) {
   BruteStrategy brute(*world_, {}, true);
   auto frames = walk(path_, lens_, brute, *renderer_);

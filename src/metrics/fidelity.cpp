@@ -67,38 +67,49 @@ uint64_t count_drawn(const std::vector<uint32_t>& pixel_ids, const std::vector<D
 
 }  // namespace
 
-std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, Strategy& strategy,
-                                   Strategy& truth, Renderer& renderer,
-                                   const CompareOptions& options, const ProgressFn& progress) {
+std::vector<std::vector<FidelityFrame>> compare_side_by_side(const CameraPath& path, const Camera& lens,
+                                                         std::span<Strategy* const> strategies, Strategy& truth,
+                                                         Renderer& renderer, const CompareOptions& options,
+                                                         const ProgressFn& progress) {
   if (options.every < 1) fail("compare", "--every must be at least 1");
-  std::vector<FidelityFrame> frames;
+  std::vector<std::vector<FidelityFrame>> frames(strategies.size());
   Camera camera = lens;
   int images = 0;
-  const std::string label = options.label.empty() ? strategy.name() : options.label;
   for (size_t i = 0; i < path.frames.size(); i += static_cast<size_t>(options.every)) {
     apply(path.frames[i], camera);
     render_frame(truth, renderer, camera);
-    Image truth_color = renderer.read_color();
-    IdImage truth_ids = renderer.read_ids();
-    std::vector<DrawItem> drawn;
-    render_frame(strategy, renderer, camera, path.frames[i].time, &drawn);
-    Image test_color = renderer.read_color();
-    IdImage test_ids = renderer.read_ids();
-    Image diff;
-    FidelityFrame f = compare_images(truth_color, truth_ids, test_color, test_ids, &diff);
-    f.missed_drawn = count_drawn(f.missed_ids, drawn);
-    f.frame = static_cast<int>(i);
-    frames.push_back(f);
-    if (!options.image_dir.empty() && images < options.max_images) {
-      const std::string stem = options.image_dir + "/frame" + std::to_string(i);
-      write_png(truth_color, stem + "-truth.png");
-      write_png(test_color, stem + "-" + label + ".png");
-      write_png(diff, stem + "-" + label + "-diff.png");
-      ++images;
+    const Image truth_color = renderer.read_color();
+    const IdImage truth_ids = renderer.read_ids();
+    const bool write_images = !options.image_dir.empty() && images < options.max_images;
+    const std::string stem = options.image_dir + "/frame" + std::to_string(i);
+    if (write_images) write_png(truth_color, stem + "-truth.png");
+    for (size_t k = 0; k < strategies.size(); ++k) {
+      std::vector<DrawItem> drawn;
+      render_frame(*strategies[k], renderer, camera, path.frames[i].time, &drawn);
+      const Image test_color = renderer.read_color();
+      Image diff;
+      FidelityFrame f = compare_images(truth_color, truth_ids, test_color, renderer.read_ids(), &diff);
+      f.missed_drawn = count_drawn(f.missed_ids, drawn);
+      f.frame = static_cast<int>(i);
+      frames[k].push_back(std::move(f));
+      if (write_images) {
+        const std::string label =
+            strategies.size() == 1 && !options.label.empty() ? options.label : strategies[k]->name();
+        write_png(test_color, stem + "-" + label + ".png");
+        write_png(diff, stem + "-" + label + "-diff.png");
+      }
     }
+    images += write_images ? 1 : 0;
     if (progress) progress(i + 1, path.frames.size());
   }
   return frames;
+}
+
+std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, Strategy& strategy,
+                                   Strategy& truth, Renderer& renderer,
+                                   const CompareOptions& options, const ProgressFn& progress) {
+  Strategy* const one[] = {&strategy};
+  return std::move(compare_side_by_side(path, lens, one, truth, renderer, options, progress).front());
 }
 
 FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {

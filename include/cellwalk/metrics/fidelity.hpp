@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -77,6 +78,13 @@ struct FidelitySummary {
 std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, Strategy& strategy,
                                    Strategy& truth, Renderer& renderer,
                                    const CompareOptions& options, const ProgressFn& progress = {});
+// Several strategies against one truth rendering per compared frame (the truth costs the most:
+// every object at level 0); result[k] is strategies[k]'s. Images are named by each strategy's
+// name (by options.label when there is one strategy and a label).
+std::vector<std::vector<FidelityFrame>> compare_side_by_side(const CameraPath& path, const Camera& lens,
+                                                         std::span<Strategy* const> strategies, Strategy& truth,
+                                                         Renderer& renderer, const CompareOptions& options,
+                                                         const ProgressFn& progress = {});
 FidelitySummary summarize(const std::vector<FidelityFrame>& frames);
 void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::string& file);
 std::string to_json(const FidelitySummary& summary);

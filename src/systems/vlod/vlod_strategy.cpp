@@ -206,6 +206,7 @@ struct VlodStrategy::Impl {
       counters.delta_fractions.push_back(pieces.empty() ? 0.0 : double(counters.added + counters.removed - changed) / double(pieces.size()));
       recharge(pieces_bytes, pieces.capacity() * sizeof(PieceId));
       if (config.prefetch) prefetch_faces(position, counters.frames);
+      counters.section_bytes_read = vlod.bytes_read();
     }
     if (!usable) {
       cell.reset();

@@ -33,6 +33,7 @@ struct VlodCounters {
   uint64_t added = 0;          // Σ |A| over the changes: (object, level) pairs loaded
   uint64_t removed = 0;        // Σ |R|
   uint64_t prefetch_requests = 0;
+  uint64_t section_bytes_read = 0;  // of the vlod section: key frames and Δ records read
   std::vector<double> delta_fractions;  // per change, |A| + |R| over |vLOD| of the new cell
 };
 
