@@ -1,0 +1,74 @@
+#include "experiments/vlod/vlod_report.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+std::string slurp(const std::filesystem::path& file) {
+  std::ifstream in(file);
+  std::stringstream text;
+  text << in.rdbuf();
+  return text.str();
+}
+
+// The whole bench at a tiny scale: every report file is written and the figures hold what
+// must hold whatever the machine: brute is ground truth, vlod draws fewer triangles than the
+// frustum alone holds, a stored Δ is no larger than its bitmask, the TSP order has no more runs.
+TEST(VlodBench, WritesReportWithSaneFigures) {
+  const test::TempDir dir;
+  VlodBenchParams p;
+  p.city_objects = 60;
+  p.plant_units = 1;
+  p.scale_objects = {60, 120};
+  p.path_kinds = {"normal"};
+  p.frames = 24;
+  p.width = 160;
+  p.height = 120;
+  p.fidelity_every = 6;
+  p.tightness_cells = 2;
+  p.out_dir = dir.file("results");
+  p.work_dir = dir.file("work");
+  p.command_line = "cellwalk bench vlod --city-objects 60";
+  const nlohmann::ordered_json s = run_vlod_bench(p);
+
+  const std::filesystem::path out = p.out_dir;
+  const std::string md = slurp(out / "vlod.md");
+  for (const char* heading : {"## Walkthroughs", "## Storage", "## Coherence", "## Scale", "## Tightness", "## Precompute"})
+    EXPECT_NE(md.find(heading), std::string::npos) << heading;
+  EXPECT_NE(md.find(p.command_line), std::string::npos);
+  for (const char* file : {"walks.csv", "storage.csv", "coherence.csv", "delta-histogram.csv", "scale.csv",
+                           "tightness.csv", "precompute.csv", "triangles-0.svg", "triangles-1.svg"})
+    EXPECT_GT(std::filesystem::file_size(out / "vlod" / file), 0u) << file;
+
+  ASSERT_EQ(s["worlds"].size(), 2u);
+  for (const auto& w : s["worlds"]) {
+    const auto& walks = w["walks"]["normal"];
+    ASSERT_EQ(walks.size(), 6u);  // brute, conv, review, vlod ×2 bounds, vlod cull=0
+    EXPECT_EQ(walks[0]["label"], "brute");
+    EXPECT_EQ(walks[0]["missed_objects"], 0u);
+    EXPECT_EQ(walks[0]["pixel_error_max_px"], 0.0);
+    EXPECT_GT(walks[0]["visible_objects"].get<uint64_t>(), 0u);
+    for (const auto& r : walks) {
+      const std::string label = r["label"];
+      if (label.rfind("vlod", 0) != 0 || label.find("cull=0") != std::string::npos) continue;
+      EXPECT_LT(r["triangles_per_frame"].get<double>(), walks[0]["triangles_per_frame"].get<double>()) << label;
+    }
+    for (const auto& v : w["vlod"]) {
+      EXPECT_GT(v["cells"].get<uint64_t>(), 0u);
+      EXPECT_LE(v["delta_bytes"].get<uint64_t>(), v["bitmask_bytes"].get<uint64_t>());
+      EXPECT_LE(v["runs_tsp_order"].get<uint64_t>(), v["runs_world_order"].get<uint64_t>());
+    }
+  }
+  ASSERT_EQ(s["scale"].size(), 2u);
+  EXPECT_EQ(s["scale"][0]["vlod_over_smallest"], 1.0);
+}
+
+}  // namespace
+}  // namespace cellwalk
