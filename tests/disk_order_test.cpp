@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <random>
+
 #include <algorithm>
 #include <bit>
 #include <cstdio>
@@ -350,6 +353,38 @@ TEST(DiskOrder, RefusesABadInitialOrderOrMatrix) {
 // The seed's Table 1 on planted matrices with noise, for exact and sampled lists: short rows
 // (intervals of up to 60 columns, 4 rows per column, about the seed's 360000 × 27000 at the top)
 // and long rows (up to 1000 columns, 1 row per 2 columns), where the exact lists' Σ |row|² grows.
+// The Morton order against codes built bit by bit from the same 21-bit quantisation.
+TEST(DiskOrder, MortonOrderSortsByInterleavedBits) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-50.0f, 250.0f);
+  std::vector<std::array<float, 3>> points(500);
+  for (auto& p : points) p = {u(rng), u(rng), std::floor(u(rng) / 50.0f)};  // z repeats: ties
+  points.push_back(points[7]);                                               // an exact tie
+  std::array<double, 3> lo{1e30, 1e30, 1e30}, hi{-1e30, -1e30, -1e30};
+  for (const auto& p : points)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], double(p[a])), hi[a] = std::max(hi[a], double(p[a]));
+  std::vector<std::pair<uint64_t, uint32_t>> expected;
+  for (uint32_t i = 0; i < points.size(); ++i) {
+    uint64_t code = 0;
+    for (int a = 0; a < 3; ++a) {
+      const double cells = double(1 << 21);
+      const auto q = uint64_t(std::min(cells - 1, std::floor((points[i][a] - lo[a]) / (hi[a] - lo[a]) * cells)));
+      for (int bit = 0; bit < 21; ++bit) code |= ((q >> bit) & 1) << (3 * bit + a);
+    }
+    expected.push_back({code, i});
+  }
+  std::sort(expected.begin(), expected.end());
+  const std::vector<uint32_t> order = morton_order(points);
+  ASSERT_EQ(order.size(), points.size());
+  for (size_t k = 0; k < order.size(); ++k) EXPECT_EQ(order[k], expected[k].second) << k;
+  // The unit cube's corners, shuffled, come back in Z order: x fastest, then y, then z.
+  const std::vector<std::array<float, 3>> corners{{1, 1, 1}, {0, 0, 0}, {1, 0, 1}, {0, 1, 0},
+                                                  {1, 1, 0}, {0, 0, 1}, {1, 0, 0}, {0, 1, 1}};
+  EXPECT_EQ(morton_order(corners), (std::vector<uint32_t>{1, 6, 3, 4, 5, 2, 7, 0}));
+  EXPECT_TRUE(morton_order(std::vector<std::array<float, 3>>{}).empty());
+  EXPECT_EQ(morton_order(std::vector<std::array<float, 3>>{{3, 3, 3}, {3, 3, 3}}), (std::vector<uint32_t>{0, 1}));
+}
+
 TEST(DiskOrder, DISABLED_Table1) {
   std::printf("%-6s %-5s %-7s %7s %9s %8s %7s %8s %10s %8s %11s\n", "size", "rows", "lists", "rows",
               "knn_s", "seed_s", "Imp1", "Imp_many", "iterations", "first_s", "s_per_iter");

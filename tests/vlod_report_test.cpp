@@ -64,6 +64,7 @@ TEST(VlodBench, WritesReportWithSaneFigures) {
       EXPECT_GT(v["cells"].get<uint64_t>(), 0u);
       EXPECT_LE(v["delta_bytes"].get<uint64_t>(), v["bitmask_bytes"].get<uint64_t>());
       EXPECT_LE(v["runs_tsp_order"].get<uint64_t>(), v["runs_world_order"].get<uint64_t>());
+      EXPECT_GE(v["runs_morton_order"].get<uint64_t>(), v["runs_tsp_order"].get<uint64_t>() > 0 ? 1u : 0u);
     }
   }
   ASSERT_EQ(s["scale"].size(), 2u);

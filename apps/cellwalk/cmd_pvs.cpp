@@ -153,7 +153,8 @@ nlohmann::ordered_json vlod_json(const visibility::VlodSizes& s) {
           {"delta_ids", s.delta_ids}, {"vlod_ids", s.vlod_ids},          {"bitmask_bytes", s.bitmask_bytes},
           {"list_bytes", s.list_bytes}, {"codec_bytes", codecs},         {"delta_bytes", s.delta_bytes},
           {"key_bytes", s.keyframe_bytes}, {"section_bytes", s.section_bytes},
-          {"runs_world_order", s.runs_world_order}, {"runs_tsp_order", s.runs_tsp_order}};
+          {"runs_world_order", s.runs_world_order}, {"runs_morton_order", s.runs_morton_order},
+          {"runs_tsp_order", s.runs_tsp_order}};
 }
 
 void print_vlod_sizes(const visibility::VlodSizes& s) {
@@ -164,8 +165,10 @@ void print_vlod_sizes(const visibility::VlodSizes& s) {
                   double(std::max<uint64_t>(s.face_pairs, 1)) / double(std::max<uint64_t>(s.vlod_ids, 1)),
               (unsigned long long)s.keyframes, (unsigned long long)s.delta_bytes, (unsigned long long)s.list_bytes,
               (unsigned long long)s.bitmask_bytes, double(s.bitmask_bytes) / double(std::max<uint64_t>(s.delta_bytes, 1)));
-  std::printf("   runs of added pieces R(M) (seed §3): world order %llu, Hamming-TSP order %llu (%.2fx fewer)\n",
-              (unsigned long long)s.runs_world_order, (unsigned long long)s.runs_tsp_order,
+  std::printf("   runs of added pieces R(M) (seed §3): world order %llu, Morton order %llu, Hamming-TSP order %llu "
+              "(%.2fx fewer than the world's)\n",
+              (unsigned long long)s.runs_world_order, (unsigned long long)s.runs_morton_order,
+              (unsigned long long)s.runs_tsp_order,
               double(s.runs_world_order) / double(std::max<uint64_t>(s.runs_tsp_order, 1)));
   std::printf("   one codec for every Δ:");
   for (size_t i = 0; i < std::size(visibility::kIdCodecs); ++i)

@@ -284,8 +284,10 @@ void add_storage_row(const BenchWorld& w, const VlodWorld& v, Tables& t, Json& j
   row.push_back(fixed(ratio(double(s.list_bytes), double(s.delta_bytes)), 1) + "×");
   row.push_back(fixed(1e6 * ratio(d.seconds, double(d.deltas)), 1));
   row.push_back(std::to_string(s.runs_world_order));
+  row.push_back(std::to_string(s.runs_morton_order));
   row.push_back(std::to_string(s.runs_tsp_order));
   row.push_back(fixed(ratio(double(s.runs_world_order), double(s.runs_tsp_order)), 2) + "×");
+  row.push_back(fixed(ratio(double(s.runs_morton_order), double(s.runs_tsp_order)), 2) + "×");
   row.push_back(fixed(100.0 * ratio(double(s.section_bytes), double(w.built.file_bytes)), 2));
   t.storage.push_back(row);
   t.precompute.push_back({w.name, fixed(v.pixel_error, 2), std::to_string(v.cells), fixed(v.setup_seconds, 1),
@@ -293,7 +295,8 @@ void add_storage_row(const BenchWorld& w, const VlodWorld& v, Tables& t, Json& j
   jw["vlod"].push_back({{"pixel_error", v.pixel_error}, {"cells", v.cells}, {"precompute_seconds", v.seconds},
                         {"face_pairs", s.face_pairs}, {"delta_bytes", s.delta_bytes}, {"bitmask_bytes", s.bitmask_bytes},
                         {"list_bytes", s.list_bytes}, {"bitmask_over_delta", ratio(double(s.bitmask_bytes), double(s.delta_bytes))},
-                        {"runs_world_order", s.runs_world_order}, {"runs_tsp_order", s.runs_tsp_order},
+                        {"runs_world_order", s.runs_world_order}, {"runs_morton_order", s.runs_morton_order},
+                        {"runs_tsp_order", s.runs_tsp_order},
                         {"decode_us_per_delta", 1e6 * ratio(d.seconds, double(d.deltas))},
                         {"section_bytes", s.section_bytes}, {"world_bytes", w.built.file_bytes}});
 }
@@ -406,7 +409,7 @@ std::vector<std::string> storage_header() {
   std::vector<std::string> h{"world", "px", "face Δs", "ids per Δ", "bitmask B", "32-bit ids B"};
   for (visibility::IdCodec c : visibility::kIdCodecs) h.push_back(visibility::id_codec_name(c) + " B");
   for (const char* s : {"stored B", "bitmask / stored", "ids / stored", "decode µs per Δ", "R(M) world order",
-                        "R(M) TSP order", "world / TSP", "section % of world"})
+                        "R(M) Morton order", "R(M) TSP order", "world / TSP", "Morton / TSP", "section % of world"})
     h.push_back(s);
   return h;
 }

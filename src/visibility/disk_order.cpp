@@ -612,6 +612,42 @@ std::vector<uint32_t> identity_order(uint32_t n) {
   return order;
 }
 
+namespace {
+
+// The 21 low bits of v spread to every third bit (bit i to bit 3i).
+uint64_t spread_bits(uint64_t v) {
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+
+}  // namespace
+
+std::vector<uint32_t> morton_order(std::span<const std::array<float, 3>> points) {
+  std::array<float, 3> lo{}, hi{};
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::numeric_limits<float>::max();
+    hi[a] = std::numeric_limits<float>::lowest();
+  }
+  for (const auto& p : points)
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
+  constexpr double kCells = double(1 << 21);
+  std::vector<uint64_t> code(points.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i)
+    for (int a = 0; a < 3; ++a) {
+      const double extent = double(hi[a]) - double(lo[a]);
+      const double t = extent > 0 ? (double(points[i][a]) - double(lo[a])) / extent : 0.0;
+      code[i] |= spread_bits(uint64_t(std::min(kCells - 1, std::floor(t * kCells)))) << a;
+    }
+  std::vector<uint32_t> order = identity_order(uint32_t(points.size()));
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return code[a] < code[b]; });
+  return order;
+}
+
 NeighbourLists nearest_neighbours(const SparseColumns& matrix, const DiskOrderOptions& options) {
   return lists_for(Columns(matrix, false), options);
 }

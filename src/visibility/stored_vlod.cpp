@@ -60,11 +60,25 @@ IdCodec codec_of(uint8_t tag, const std::string& where) {
   return kIdCodecs[tag];
 }
 
-// R(M) of the crossings' additions in the world's piece order and in the TSP order (bounded to
-// seconds: a report, not the layout, which applying the order to the world will be).
-void measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, uint32_t pieces, VlodSizes& sizes) {
+// The pieces along the Morton curve of their objects' box centres, an object's levels together.
+std::vector<uint32_t> morton_piece_order(const World& world, const PieceTable& pieces) {
+  std::vector<std::array<float, 3>> centres(pieces.count());
+  for (PieceId p = 0; p < pieces.count(); ++p) {
+    const Vec3 c = world.object(pieces.object(p)).bounds.center();
+    centres[p] = {c.x, c.y, c.z};
+  }
+  return morton_order(centres);
+}
+
+// R(M) of the crossings' additions in the world's piece order, the Morton order (the seed's
+// baseline) and the TSP order (bounded to seconds: a report, not the layout, which applying the
+// order to the world will be).
+void measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, const World& world, const PieceTable& table,
+                        VlodSizes& sizes) {
+  const auto pieces = uint32_t(table.count());
   const std::vector<uint32_t> identity = identity_order(pieces);
   sizes.runs_world_order = total_runs(rows, identity);
+  sizes.runs_morton_order = total_runs(rows, morton_piece_order(world, table));
   DiskOrderOptions options;
   options.max_iterations = 2000;
   options.max_seconds = 5;
@@ -150,7 +164,7 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
         if (!row->empty()) added_rows.push_back(std::move(*row));
     }
   }
-  measure_disk_order(added_rows, uint32_t(pieces.count()), sizes);
+  measure_disk_order(added_rows, world, pieces, sizes);
   ByteWriter index;
   const std::vector<uint8_t> cells_bytes = serialize_partition(partition);
   index.put(uint64_t(cells_bytes.size()));

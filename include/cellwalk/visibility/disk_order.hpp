@@ -13,6 +13,7 @@
 // the order to its own files.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -45,6 +46,11 @@ uint32_t hamming(std::span<const uint32_t> u, std::span<const uint32_t> v);
 
 // 0, 1, ..., n-1: the order the pieces already have.
 std::vector<uint32_t> identity_order(uint32_t n);
+
+// The baseline of §3's comparison: the points' indices along the Morton (Z-order) curve over
+// their bounding box, 21 bits an axis (x the lowest bit of each triple), ties by the smaller
+// index. A box of zero extent on an axis puts every point at 0 on it.
+std::vector<uint32_t> morton_order(std::span<const std::array<float, 3>> points);
 
 // Where the improvement starts: the greedy tour of the seed, or the caller's order (e.g. a
 // Morton order, to polish it instead).

@@ -60,8 +60,9 @@ struct VlodSizes {
   uint64_t keyframe_bytes = 0;
   uint64_t section_bytes = 0;
   // §3: R(M) of the matrix whose rows are the pieces each crossing adds (A one way, R the
-  // other), in the world's order and in the Hamming-TSP order of disk_order.hpp.
-  uint64_t runs_world_order = 0, runs_tsp_order = 0;
+  // other), in the world's order, in the Morton order of the objects' centres (the seed's
+  // baseline) and in the Hamming-TSP order of disk_order.hpp.
+  uint64_t runs_world_order = 0, runs_morton_order = 0, runs_tsp_order = 0;
 };
 
 // Encodes the section, its own partition included, from a vlod engine's sets. Key cells: in id
