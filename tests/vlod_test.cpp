@@ -6,6 +6,7 @@
 #include <cmath>
 #include <iterator>
 #include <map>
+#include <numeric>
 
 #include <nlohmann/json.hpp>
 
@@ -16,8 +17,10 @@
 #include "precompute/embree_scene.hpp"
 #include "precompute/pvs_builder.hpp"
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/scene_tree/scene_tree.hpp"
 #include "cellwalk/systems/vlod/vlod_strategy.hpp"
 #include "cellwalk/visibility/cell_lod.hpp"
+#include "cellwalk/visibility/disk_order.hpp"
 #include "cellwalk/visibility/stored_vlod.hpp"
 #include "test_support.hpp"
 
@@ -326,6 +329,59 @@ TEST_F(VlodCity, ShardsMergeIntoTheSectionOfOneRun) {
   EXPECT_NE(r.output.find("vlod section"), std::string::npos) << r.output;
   const World a(whole), b(merged);
   EXPECT_EQ(a.file().read_all(visibility::kVlodSection), b.file().read_all(visibility::kVlodSection));
+}
+
+// §3 applied: each layout moves the encoded levels, not their bytes; the world still verifies;
+// the runs of the crossings' additions in the file's byte order are what pvs reports, fewest
+// in the TSP layout; and `keep` leaves the geometry where it was.
+TEST_F(VlodCity, DiskOrderMovesTheLevelsNotTheirBytes) {
+  const World original(world_);
+  std::map<std::string, uint64_t> runs;
+  for (const std::string layout : {"keep", "morton", "tsp"}) {
+    const std::string file = dir_->file("layout-" + layout + ".cww");
+    auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:30 --refine 1 --lod-height 72 --json --disk-order " +
+                                layout + " -o " + file);
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = summary_of(r);
+    ASSERT_TRUE(j.contains("vlod")) << r.output;
+    ASSERT_EQ(test::run_cellwalk("verify " + file).exit_code, 0) << layout;
+    const World world(file);
+    ASSERT_EQ(world.object_count(), original.object_count());
+    bool moved = false;
+    for (ObjectId id = 0; id < world.object_count(); ++id)
+      for (uint32_t level = 0; level < world.object(id).lod_count; ++level) {
+        ASSERT_EQ(world.read_level(id, level), original.read_level(id, level)) << layout << " " << id << "/" << level;
+        moved |= world.lod(id, level).offset != original.lod(id, level).offset;
+      }
+    EXPECT_EQ(moved, layout != "keep") << layout;
+    // R(M) in the file's byte order, from the stored Δs.
+    const visibility::StoredVlod stored(world);
+    std::vector<std::vector<uint32_t>> rows;
+    for (CellId c = 0; c < stored.partition().cell_count(); ++c)
+      for (CellId n : stored.neighbours(c))
+        if (c < n) {
+          const auto d = stored.delta(c, n);
+          ASSERT_TRUE(d.has_value());
+          for (const auto* row : {&d->added, &d->removed})
+            if (!row->empty()) rows.push_back(*row);
+        }
+    ASSERT_FALSE(rows.empty());
+    std::vector<uint32_t> by_offset(stored.pieces().count());
+    std::iota(by_offset.begin(), by_offset.end(), 0u);
+    auto offset = [&](uint32_t p) { return world.lod(stored.pieces().object(p), stored.pieces().level(p)).offset; };
+    std::sort(by_offset.begin(), by_offset.end(), [&](uint32_t a, uint32_t b) { return offset(a) < offset(b); });
+    runs[layout] = visibility::total_runs(rows, by_offset);
+    EXPECT_EQ(runs[layout], j["vlod"]["runs_written"].get<uint64_t>()) << layout;
+  }
+  EXPECT_LT(runs["tsp"], runs["keep"]);
+  EXPECT_LE(runs["tsp"], runs["morton"]);
+  // A k-d scene tree (conv, hdov) built on the world still belongs to it laid out anew.
+  const std::string tree = dir_->file("layout.scenetree");
+  open_scene_tree(original, SceneTreeParams{}, tree);
+  const World laid_out(dir_->file("layout-tsp.cww"));
+  EXPECT_NO_THROW(SceneTree(laid_out, tree));
+  // A disk order is no option of another engine.
+  EXPECT_NE(test::run_cellwalk("pvs " + world_ + " --engine sampling --disk-order tsp -o " + dir_->file("x.cww")).exit_code, 0);
 }
 
 }  // namespace

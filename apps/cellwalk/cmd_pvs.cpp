@@ -31,6 +31,8 @@ struct Args {
   EngineOptions options;
   double lod_height = 480, lod_fov = 60, lod_aspect = 4.0 / 3.0;
   bool faithful_bound = false;
+  std::string disk_order = "tsp";
+  bool disk_order_given = false;
   bool json = false;
 };
 
@@ -154,10 +156,10 @@ nlohmann::ordered_json vlod_json(const visibility::VlodSizes& s) {
           {"list_bytes", s.list_bytes}, {"codec_bytes", codecs},         {"delta_bytes", s.delta_bytes},
           {"key_bytes", s.keyframe_bytes}, {"section_bytes", s.section_bytes},
           {"runs_world_order", s.runs_world_order}, {"runs_morton_order", s.runs_morton_order},
-          {"runs_tsp_order", s.runs_tsp_order}};
+          {"runs_tsp_order", s.runs_tsp_order}, {"runs_written", s.runs_written}};
 }
 
-void print_vlod_sizes(const visibility::VlodSizes& s) {
+void print_vlod_sizes(const visibility::VlodSizes& s, const std::string& layout) {
   std::printf("  vlod section: %llu face Δs, %.1f ids each (%.1f%% of a vLOD), %llu key cells; Δs %llu bytes as stored "
               "(smallest codec per Δ) vs %llu as 32-bit ids vs %llu as bitmasks (%.0fx smaller)\n",
               (unsigned long long)s.face_pairs, double(s.delta_ids) / double(std::max<uint64_t>(s.face_pairs, 1)),
@@ -170,6 +172,7 @@ void print_vlod_sizes(const visibility::VlodSizes& s) {
               (unsigned long long)s.runs_world_order, (unsigned long long)s.runs_morton_order,
               (unsigned long long)s.runs_tsp_order,
               double(s.runs_world_order) / double(std::max<uint64_t>(s.runs_tsp_order, 1)));
+  std::printf("   geometry laid out in the %s order: R(M) %llu\n", layout.c_str(), (unsigned long long)s.runs_written);
   std::printf("   one codec for every Δ:");
   for (size_t i = 0; i < std::size(visibility::kIdCodecs); ++i)
     std::printf(" %s %llu", visibility::id_codec_name(visibility::kIdCodecs[i]).c_str(), (unsigned long long)s.codec_bytes[i]);
@@ -178,13 +181,16 @@ void print_vlod_sizes(const visibility::VlodSizes& s) {
 
 // Writes the sets into `out`: a vlod run as the vlod section of per-face Δs and key cells (the
 // world's other visible sets stay), any other run as the cells, pvs and dov sections.
-visibility::PvsSizes write_sets(const World& world, const std::string& out, const ViewCellPartition& partition,
+visibility::PvsSizes write_sets(const Args& a, const World& world, const std::string& out, const ViewCellPartition& partition,
                                 const visibility::CellSets& sets, const visibility::PvsRun& run,
                                 std::optional<visibility::VlodSizes>& vlod) {
   const std::string prefix = "vlod:";
-  if (run.engine.rfind(prefix, 0) != 0) return visibility::write_world_with_pvs(world, out, partition, sets, run);
+  if (run.engine.rfind(prefix, 0) != 0) {
+    if (a.disk_order_given) fail("pvs --disk-order", "lays the geometry out for a vlod run only; give --engine vlod or leave it out");
+    return visibility::write_world_with_pvs(world, out, partition, sets, run);
+  }
   const visibility::CellLodRule rule = visibility::parse_cell_lod_rule(run.engine.substr(prefix.size()), "pvs run");
-  vlod = visibility::write_world_with_vlod(world, out, partition, sets, rule);
+  vlod = visibility::write_world_with_vlod(world, out, partition, sets, rule, visibility::parse_disk_layout(a.disk_order));
   return {};
 }
 
@@ -193,7 +199,7 @@ void run_merge(const Args& a, const World& world) {
   refuse_same_files(a.merge, {out});
   const visibility::PvsMerge merged = visibility::merge_pvs_parts(a.merge, world);
   std::optional<visibility::VlodSizes> vlod;
-  const visibility::PvsSizes sizes = write_sets(world, out, *merged.partition, merged.sets, merged.run, vlod);
+  const visibility::PvsSizes sizes = write_sets(a, world, out, *merged.partition, merged.sets, merged.run, vlod);
   if (a.json) {
     nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
@@ -202,7 +208,7 @@ void run_merge(const Args& a, const World& world) {
     return;
   }
   std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
-  if (vlod) print_vlod_sizes(*vlod);
+  if (vlod) print_vlod_sizes(*vlod, a.disk_order);
   else print_sizes(sizes);
 }
 
@@ -249,7 +255,7 @@ void run_compute(const Args& a, const World& world) {
   visibility::PvsSizes sizes;
   std::optional<visibility::VlodSizes> vlod;
   if (!sharded) {
-    sizes = write_sets(world, out, *partition, sets, run, vlod);
+    sizes = write_sets(a, world, out, *partition, sets, run, vlod);
     std::filesystem::remove(checkpoint);
   }
   uint64_t solid = 0, skipped = 0;
@@ -273,7 +279,7 @@ void run_compute(const Args& a, const World& world) {
               "%.2f cells/s; setup %.1f s\n",
               engine->name().c_str(), partition->cell_count(), partition->kind().c_str(), (unsigned long long)solid,
               (unsigned long long)skipped, (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
-  if (vlod) print_vlod_sizes(*vlod);
+  if (vlod) print_vlod_sizes(*vlod, a.disk_order);
   else if (!sharded) print_sizes(sizes);
   std::printf("  wrote %s\n", out.c_str());
 }
@@ -308,13 +314,17 @@ void register_pvs(CLI::App& root) {
   vlod_options.push_back(cmd->add_option("--lod-aspect", a->lod_aspect, "vLOD: image width / height the levels are chosen for")->capture_default_str()->check(number_in(0.05, 20)));
   vlod_options.push_back(cmd->add_option("--pixel-error", a->options.lod_rule.pixel_error, "vLOD: the worst screen error of a level from anywhere in its cell, pixels")->capture_default_str()->check(number_in(0.01, 1000)));
   vlod_options.push_back(cmd->add_flag("--faithful-bound", a->faithful_bound, "vLOD: the seed's text of the per-cell bound (§2.2), not a bound; to reproduce the paper only"));
+  CLI::Option* disk_order = cmd->add_option("--disk-order", a->disk_order, "vLOD: lay the geometry out on disk in this order of the pieces (§3): keep, morton or tsp")->capture_default_str()->check(CLI::IsMember(visibility::disk_layout_names()));
   cmd->add_option("--dov-resolution", a->options.dov_resolution, "DoV: cube-map face resolution")->capture_default_str()->check(integer_in(4, 4096));
   cmd->add_option("--dov-cubes", a->dov_cubes, "DoV: cube maps by " + dov_modes + " (exact: GL at level 0, the reference)")->capture_default_str();
   cmd->add_option("--dov-compare", a->dov_compare, "DoV: time exact against --dov-cubes on this many cells, interleaved, and print how far their DoVs differ; write nothing")->check(integer_in(0, 100000));
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
   cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_flag("--json", a->json, "Print the report as JSON");
-  cmd->callback([a, vlod_options] {
+  cmd->callback([a, vlod_options, disk_order] {
+    a->disk_order_given = disk_order->count() > 0;
+    if (a->disk_order_given && a->merge.empty() && a->engine != "vlod")
+      fail("pvs --disk-order", "lays the geometry out for a vlod run only; give --engine vlod or leave it out");
     for (const CLI::Option* o : vlod_options)
       if (o->count() > 0 && a->engine != "vlod")
         fail("pvs " + o->get_name(), "chooses the levels of the vlod engine only; give --engine vlod or leave it out");

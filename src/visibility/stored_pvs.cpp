@@ -127,7 +127,8 @@ void write_world_sections(const World& world, const std::string& out, const std:
   }
   for (const NamedSection& s : sections) {
     w.begin_section(s.name);
-    w.write(s.bytes);
+    if (s.stream) s.stream(w);
+    else w.write(s.bytes);
     w.end_section();
   }
   w.finish();

@@ -70,15 +70,21 @@ std::vector<uint32_t> morton_piece_order(const World& world, const PieceTable& p
   return morton_order(centres);
 }
 
-// R(M) of the crossings' additions in the world's piece order, the Morton order (the seed's
-// baseline) and the TSP order (bounded to seconds: a report, not the layout, which applying the
-// order to the world will be).
-void measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, const World& world, const PieceTable& table,
-                        VlodSizes& sizes) {
-  const auto pieces = uint32_t(table.count());
-  const std::vector<uint32_t> identity = identity_order(pieces);
-  sizes.runs_world_order = total_runs(rows, identity);
-  sizes.runs_morton_order = total_runs(rows, morton_piece_order(world, table));
+// The pieces in the order their encoded levels lie in the geometry section.
+std::vector<uint32_t> file_piece_order(const World& world, const PieceTable& pieces) {
+  std::vector<uint32_t> order = identity_order(uint32_t(pieces.count()));
+  auto offset = [&](uint32_t p) { return world.lod(pieces.object(p), pieces.level(p)).offset; };
+  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return offset(a) < offset(b); });
+  return order;
+}
+
+// R(M) of the crossings' additions in the file's layout, the Morton order (the seed's baseline)
+// and the TSP order (its search bounded to seconds).
+PieceOrders measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, const World& world,
+                               const PieceTable& table, VlodSizes& sizes) {
+  PieceOrders orders{file_piece_order(world, table), morton_piece_order(world, table), {}};
+  sizes.runs_world_order = total_runs(rows, orders.file);
+  sizes.runs_morton_order = total_runs(rows, orders.morton);
   DiskOrderOptions options;
   options.max_iterations = 2000;
   options.max_seconds = 5;
@@ -86,8 +92,32 @@ void measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, const Wo
   double pairs = 0;
   for (const auto& row : rows) pairs += double(row.size()) * double(row.size());
   options.use_sampling = pairs > 2e8;
-  const std::vector<uint32_t> order = disk_order(columns_from_rows(rows, pieces), identity, options);
-  sizes.runs_tsp_order = total_runs(rows, order);
+  orders.tsp = disk_order(columns_from_rows(rows, uint32_t(table.count())), orders.file, options);
+  sizes.runs_tsp_order = total_runs(rows, orders.tsp);
+  return orders;
+}
+
+// The geometry section with the levels in `order`, and the lods section with each entry's offset
+// moved with its level (the offset is an entry's first 8 bytes, docs/format.md).
+std::vector<NamedSection> laid_out_geometry(const World& world, const PieceTable& pieces,
+                                            const std::vector<uint32_t>& order) {
+  constexpr size_t kLodEntry = 24;
+  std::vector<uint8_t> lods = world.file().read_all("lods");
+  std::vector<uint64_t> offsets(pieces.count());
+  uint64_t at = 0;
+  for (uint32_t p : order) {
+    offsets[p] = at;
+    at += world.lod(pieces.object(p), pieces.level(p)).bytes;
+  }
+  for (PieceId p = 0; p < pieces.count(); ++p) {
+    const uint64_t entry = world.object(pieces.object(p)).first_lod + pieces.level(p);
+    if ((entry + 1) * kLodEntry > lods.size()) fail(world.file().path(), "section lods is shorter than its objects say (the file is damaged)");
+    for (int b = 0; b < 8; ++b) lods[entry * kLodEntry + size_t(b)] = uint8_t(offsets[p] >> (8 * b));
+  }
+  NamedSection geometry{"geometry", {}, [&world, &pieces, order](WorldWriter& w) {
+                          for (uint32_t p : order) w.write(world.read_level(pieces.object(p), pieces.level(p)));
+                        }};
+  return {std::move(geometry), {"lods", std::move(lods), {}}};
 }
 
 }  // namespace
@@ -110,7 +140,8 @@ std::vector<PieceId> vlod_pieces(const World& world, const PieceTable& pieces, c
 }
 
 std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
-                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing) {
+                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing,
+                                         PieceOrders* orders) {
   const PieceTable pieces(world);
   const size_t cells = partition.cell_count();
   std::vector<std::vector<PieceId>> vlod(cells);
@@ -164,7 +195,8 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
         if (!row->empty()) added_rows.push_back(std::move(*row));
     }
   }
-  measure_disk_order(added_rows, world, pieces, sizes);
+  PieceOrders measured = measure_disk_order(added_rows, world, pieces, sizes);
+  if (orders) *orders = std::move(measured);
   ByteWriter index;
   const std::vector<uint8_t> cells_bytes = serialize_partition(partition);
   index.put(uint64_t(cells_bytes.size()));
@@ -194,13 +226,41 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
   return std::move(out.bytes());
 }
 
+std::string disk_layout_name(DiskLayout layout) {
+  switch (layout) {
+    case DiskLayout::kKeep: return "keep";
+    case DiskLayout::kMorton: return "morton";
+    case DiskLayout::kTsp: return "tsp";
+  }
+  return "?";
+}
+
+std::vector<std::string> disk_layout_names() { return {"keep", "morton", "tsp"}; }
+
+DiskLayout parse_disk_layout(const std::string& name) {
+  for (DiskLayout l : {DiskLayout::kKeep, DiskLayout::kMorton, DiskLayout::kTsp})
+    if (disk_layout_name(l) == name) return l;
+  fail("--disk-order", "unknown layout '" + name + "'; use keep, morton or tsp");
+}
+
 VlodSizes write_world_with_vlod(const World& world, const std::string& out, const ViewCellPartition& partition,
-                                const CellSets& sets, const CellLodRule& rule) {
+                                const CellSets& sets, const CellLodRule& rule, DiskLayout layout) {
   for (CellId c = 0; c < partition.cell_count(); ++c)
     if (partition.cell(c).computed() && !sets.count(c))
       fail("pvs", "cell " + std::to_string(c) + " has no vLOD; compute or merge every shard first");
   VlodSizes sizes;
-  write_world_sections(world, out, {{kVlodSection, encode_vlod_section(world, partition, sets, rule, sizes)}});
+  PieceOrders orders;
+  std::vector<NamedSection> sections{{kVlodSection, encode_vlod_section(world, partition, sets, rule, sizes, 3, &orders), {}}};
+  sizes.runs_written = layout == DiskLayout::kKeep     ? sizes.runs_world_order
+                       : layout == DiskLayout::kMorton ? sizes.runs_morton_order
+                                                       : sizes.runs_tsp_order;
+  const PieceTable pieces(world);  // outlives the geometry's writer
+  if (layout != DiskLayout::kKeep) {
+    std::vector<NamedSection> geometry =
+        laid_out_geometry(world, pieces, layout == DiskLayout::kMorton ? orders.morton : orders.tsp);
+    std::move(geometry.begin(), geometry.end(), std::back_inserter(sections));
+  }
+  write_world_sections(world, out, sections);
   return sizes;
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <memory>
 #include <optional>
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/store/world_file.hpp"
 #include "cellwalk/visibility/view_cell.hpp"
 #include "cellwalk/visibility/visibility.hpp"
 
@@ -54,9 +56,12 @@ struct PvsSizes {
 PvsSizes write_world_with_pvs(const World& world, const std::string& out, const ViewCellPartition& partition,
                               const CellSets& sets, const PvsRun& run);
 
+// A section to write: its bytes, or, for one too large to hold (a world's geometry), a
+// function that writes them into the open section.
 struct NamedSection {
   std::string name;
   std::vector<uint8_t> bytes;
+  std::function<void(WorldWriter&)> stream;
 };
 // Writes `out`: every section of `world` but those named in `drop` or in `sections`, then
 // `sections`. Atomic, as above.

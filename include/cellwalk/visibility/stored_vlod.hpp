@@ -60,21 +60,42 @@ struct VlodSizes {
   uint64_t keyframe_bytes = 0;
   uint64_t section_bytes = 0;
   // §3: R(M) of the matrix whose rows are the pieces each crossing adds (A one way, R the
-  // other), in the world's order, in the Morton order of the objects' centres (the seed's
+  // other), in the world file's layout as it was (the builder's object order, unless an earlier
+  // run reordered it), in the Morton order of the objects' centres (the seed's
   // baseline) and in the Hamming-TSP order of disk_order.hpp.
   uint64_t runs_world_order = 0, runs_morton_order = 0, runs_tsp_order = 0;
+  uint64_t runs_written = 0;  // in the layout the world was written with (DiskLayout)
+};
+
+// The orders §3 compares, each a permutation of the pieces (order[k] = the piece at position k).
+struct PieceOrders {
+  std::vector<uint32_t> file, morton, tsp;
 };
 
 // Encodes the section, its own partition included, from a vlod engine's sets. Key cells: in id
-// order, a cell with a vLOD and no key cell within `key_spacing` face steps becomes one.
+// order, a cell with a vLOD and no key cell within `key_spacing` face steps becomes one. With
+// `orders`, returns the orders it measured R(M) in.
 std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
-                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing = 3);
+                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing = 3,
+                                         PieceOrders* orders = nullptr);
+
+// §3 applied: the order the world's encoded levels are laid out in on disk, so the pieces each
+// crossing adds lie in few contiguous runs. kKeep leaves the geometry as it is; kMorton lays
+// it out along the Morton curve of the objects' centres (the baseline); kTsp in the
+// Hamming-TSP order of the Δs' additions (disk_order.hpp). Only the geometry and lods sections
+// change: each level's bytes move, its table entry follows them (docs/format.md).
+enum class DiskLayout { kKeep, kMorton, kTsp };
+std::string disk_layout_name(DiskLayout layout);
+std::vector<std::string> disk_layout_names();
+// Throws Error listing disk_layout_names() for an unknown name.
+DiskLayout parse_disk_layout(const std::string& name);
 
 // Writes `out`: `world` with its vlod section replaced by the one of these sets, every other
 // section (the cells, pvs and dov of another run too) kept, so one world serves vlod beside the
-// strategies that read DoVs. Atomic. REQUIRES: every computed cell has a set.
+// strategies that read DoVs, and its geometry laid out as `layout` says. Atomic. REQUIRES: every
+// computed cell has a set.
 VlodSizes write_world_with_vlod(const World& world, const std::string& out, const ViewCellPartition& partition,
-                                const CellSets& sets, const CellLodRule& rule);
+                                const CellSets& sets, const CellLodRule& rule, DiskLayout layout = DiskLayout::kTsp);
 
 // Reads the section's index (its cells; per cell: key frame and the Δ records of its faces) and reads each
 // record from the file when asked. Thread-safety: const methods may be called concurrently.

@@ -23,7 +23,11 @@ uint64_t world_identity(const World& world) {
   XXH3_state_t* state = XXH3_createState();
   XXH3_64bits_reset(state);
   XXH3_64bits_update(state, objects.data(), objects.size());
-  XXH3_64bits_update(state, lods.data(), lods.size());
+  // Each level's entry without its offset (its first 8 of 24 bytes): a disk order that moves
+  // the levels (`pvs --disk-order`) keeps the world the tree was built from.
+  constexpr size_t kEntry = 24, kOffset = 8;
+  for (size_t at = 0; at + kEntry <= lods.size(); at += kEntry)
+    XXH3_64bits_update(state, lods.data() + at + kOffset, kEntry - kOffset);
   const uint64_t hash = XXH3_64bits_digest(state);
   XXH3_freeState(state);
   return hash;

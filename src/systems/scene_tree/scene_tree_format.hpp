@@ -32,7 +32,8 @@ struct Tables {
 Tables read_tables(const std::vector<uint8_t>& nodes, const std::vector<uint8_t>& levels, uint64_t geometry_bytes,
                    std::span<const uint32_t> lod_counts, const std::string& where);
 
-// XXH3-64 of the world's "objects" and "lods" sections: a tree file belongs to one world.
+// XXH3-64 of the world's "objects" section and its "lods" entries less their offsets: a tree
+// file belongs to one world, whatever the order of its levels on disk.
 uint64_t world_identity(const World& world);
 // The "kd-params" section's text: a tree file is reused only when it is byte-equal.
 std::string params_json(const SceneTreeParams& params, uint64_t identity, size_t objects);
