@@ -71,5 +71,31 @@ TEST(VlodBench, WritesReportWithSaneFigures) {
   EXPECT_EQ(s["scale"][0]["vlod_over_smallest"], 1.0);
 }
 
+// A strategy the budget cannot hold is a row saying so, and the bench goes on.
+TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
+  const test::TempDir dir;
+  VlodBenchParams p;
+  p.city_objects = 60;
+  p.plant_units = 1;
+  p.scale_objects = {};
+  p.path_kinds = {"normal"};
+  p.pixel_errors = {1.0};
+  p.frames = 12;
+  p.width = 96;
+  p.height = 72;
+  p.fidelity_every = 6;
+  p.tightness_cells = 1;
+  p.budget_fraction = 0.001;
+  p.min_budget_mib = 1;  // REVIEW's R-tree alone needs more
+  p.out_dir = dir.file("results");
+  p.work_dir = dir.file("work");
+  const nlohmann::ordered_json s = run_vlod_bench(p);
+  uint64_t refused = 0;
+  for (const auto& w : s["worlds"])
+    for (const auto& r : w["walks"]["normal"]) refused += r.contains("refused") ? 1 : 0;
+  EXPECT_GT(refused, 0u);
+  EXPECT_NE(slurp(std::filesystem::path(p.out_dir) / "vlod.md").find("refused: "), std::string::npos);
+}
+
 }  // namespace
 }  // namespace cellwalk

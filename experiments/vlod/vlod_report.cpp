@@ -135,6 +135,7 @@ struct Run {
   std::vector<uint64_t> triangles;  // per frame
   std::optional<VlodCounters> counters;
   FidelitySummary fidelity;
+  std::string refused;  // the Error of a strategy that refused the budget (or failed): no figures
 };
 
 StrategyOptions strategy_options(const RunBudget& budget, const VlodBenchParams& p) {
@@ -159,25 +160,33 @@ void walk_and_compare(std::vector<Run>& runs, const CameraPath& path, const RunB
   const Camera lens = camera_of(p);
   Progress progress("walks " + title, runs.size());
   for (size_t i = 0; i < runs.size(); ++i) {
-    const World world(runs[i].world_file);
-    Renderer renderer(render_settings(budget, p));
-    const auto strategy = make_strategy(runs[i].strategy, world, strategy_options(budget, p));
-    const std::vector<FrameStats> frames = walk(path, lens, *strategy, renderer);
-    runs[i].walk = summarize(runs[i].label, frames);
-    runs[i].walk.peak_resident_bytes = std::max(runs[i].walk.peak_resident_bytes, strategy->peak_resident_bytes());
-    for (const FrameStats& f : frames) runs[i].triangles.push_back(f.triangles);
-    if (const auto* v = dynamic_cast<const VlodStrategy*>(strategy.get())) runs[i].counters = v->counters();
+    try {
+      const World world(runs[i].world_file);
+      Renderer renderer(render_settings(budget, p));
+      const auto strategy = make_strategy(runs[i].strategy, world, strategy_options(budget, p));
+      const std::vector<FrameStats> frames = walk(path, lens, *strategy, renderer);
+      runs[i].walk = summarize(runs[i].label, frames);
+      runs[i].walk.peak_resident_bytes = std::max(runs[i].walk.peak_resident_bytes, strategy->peak_resident_bytes());
+      for (const FrameStats& f : frames) runs[i].triangles.push_back(f.triangles);
+      if (const auto* v = dynamic_cast<const VlodStrategy*>(strategy.get())) runs[i].counters = v->counters();
+    } catch (const Error& e) {
+      runs[i].refused = e.what();  // a strategy the budget cannot hold is a row of the report
+    }
     progress.update(i + 1);
   }
   progress.finish();
   std::vector<std::unique_ptr<World>> worlds;
   std::vector<std::unique_ptr<Strategy>> strategies;
   std::vector<Strategy*> pointers;
-  for (const Run& r : runs) {
-    worlds.push_back(std::make_unique<World>(r.world_file));
-    strategies.push_back(make_strategy(r.strategy, *worlds.back(), strategy_options(budget, p)));
+  std::vector<size_t> compared_runs;
+  for (size_t i = 0; i < runs.size(); ++i) {
+    if (!runs[i].refused.empty()) continue;
+    worlds.push_back(std::make_unique<World>(runs[i].world_file));
+    strategies.push_back(make_strategy(runs[i].strategy, *worlds.back(), strategy_options(budget, p)));
     pointers.push_back(strategies.back().get());
+    compared_runs.push_back(i);
   }
+  if (pointers.empty()) return;
   const auto truth = make_strategy("ground-truth", *worlds.front(), {});
   Renderer renderer(render_settings(budget, p));
   CompareOptions options;
@@ -186,7 +195,7 @@ void walk_and_compare(std::vector<Run>& runs, const CameraPath& path, const RunB
   const auto frames = compare_side_by_side(path, lens, pointers, *truth, renderer, options,
                                            [&](size_t done, size_t) { compared.update(done); });
   compared.finish();
-  for (size_t i = 0; i < runs.size(); ++i) runs[i].fidelity = summarize(frames[i]);
+  for (size_t k = 0; k < compared_runs.size(); ++k) runs[compared_runs[k]].fidelity = summarize(frames[k]);
 }
 
 std::string vlod_label(double pixel_error, bool cull) {
@@ -207,6 +216,8 @@ uint64_t budget_bytes(const BenchWorld& w, const VlodBenchParams& p) {
   return std::max<uint64_t>(uint64_t(p.budget_fraction * double(w.built.file_bytes)), uint64_t(p.min_budget_mib * kMiB));
 }
 
+std::vector<std::string> walk_header();
+
 struct Tables {
   Table walks, storage, coherence, scale, tightness, precompute;
   std::vector<std::string> histogram_header;
@@ -218,6 +229,15 @@ void add_walk_rows(const std::string& world, const std::string& kind, const std:
   const double brute_ms = runs.front().walk.mean_ms;
   const double pixels = double(p.width) * double(p.height);
   for (const Run& r : runs) {
+    if (!r.refused.empty()) {
+      std::string why = r.refused;  // a table cell: no column separators of markdown or CSV
+      std::replace(why.begin(), why.end(), ',', ';');
+      std::replace(why.begin(), why.end(), '|', '/');
+      std::vector<std::string> row{world, kind, r.label, "refused: " + why};
+      row.resize(walk_header().size(), "");
+      t.walks.push_back(row);
+      continue;
+    }
     const WalkSummary& s = r.walk;
     const FidelitySummary& f = r.fidelity;
     const double per_frame = s.frames ? double(s.total_triangles) / double(s.frames) : 0.0;
@@ -325,6 +345,7 @@ void add_tightness_rows(const BenchWorld& w, const World& world, const VlodWorld
 }
 
 Json json_of(const Run& r) {
+  if (!r.refused.empty()) return {{"label", r.label}, {"refused", r.refused}};
   return {{"label", r.label},
           {"mean_ms", r.walk.mean_ms},
           {"p95_ms", r.walk.p95_ms},
@@ -387,6 +408,8 @@ Json measure_scale(const std::vector<BenchWorld>& cities, const VlodBenchParams&
     const uint64_t total = budget_bytes(w, p);
     walk_and_compare(runs, paths.by_kind.front().second, split_run_budget(total, uint64_t(p.frames), std::nullopt), p,
                      w.name + " scale");
+    for (const Run& r : runs)
+      if (!r.refused.empty()) fail("bench vlod", r.label + " on " + w.name + ": " + r.refused);
     const double vlod_ms = runs[1].walk.mean_ms;
     if (smallest_ms == 0) smallest_ms = vlod_ms;
     t.scale.push_back({w.name, std::to_string(w.built.triangles), mib(w.built.file_bytes), mib(total),

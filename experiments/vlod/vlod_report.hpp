@@ -42,7 +42,7 @@ struct VlodBenchParams {
   std::vector<double> pixel_errors = {1.0, 0.25};
   int width = 640, height = 480;
   double budget_fraction = 0.02;  // the run's budget: this share of the world file ...
-  double min_budget_mib = 32;     // ... but at least this many MiB (small worlds)
+  double min_budget_mib = 64;     // ... but at least this many MiB (small worlds)
   int fidelity_every = 10;
   int tightness_cells = 6;
   uint64_t seed = 1;
