@@ -261,6 +261,7 @@ TEST(PixelError, AMissingObjectIsUnmatchedNotFinite) {
         compare_images(blank_color(80, 60), truth, blank_color(80, 60), test, nullptr);
     EXPECT_EQ(f.missed_objects, missing ? 1u : 0u);
     EXPECT_EQ(f.missed_ids, missing ? std::vector<uint32_t>{2} : std::vector<uint32_t>{});
+    EXPECT_EQ(f.largest_missed_pixels, missing ? uint64_t(lone.area()) : 0u);
     EXPECT_EQ((missing ? f.truth_to_test : f.test_to_truth).unmatched, uint64_t(lone.area()));
   }
 }
@@ -299,8 +300,11 @@ TEST(PixelError, SummaryTakesTheWorseDirectionAndCountsFramesOver1Px) {
   frames[0].truth_to_test = {1.0, 1.0, 2};
   frames[1].truth_to_test = {1.0, 1.0, 0};
   frames[2].truth_to_test = {7.5, 2.5, 1};
+  frames[0].largest_missed_pixels = 3;
+  frames[2].largest_missed_pixels = 11;
   // frames[3] identical: all zero.
   const FidelitySummary s = summarize(frames);
+  EXPECT_EQ(s.largest_missed_pixels, 11u);
   EXPECT_EQ(s.max_pixel_error_px, 7.5);
   EXPECT_EQ(s.max_pixel_error_p999_px, 2.5);
   EXPECT_DOUBLE_EQ(s.pixel_error_over_1px_fraction, 2.0 / 4.0);       // frames 0 and 2

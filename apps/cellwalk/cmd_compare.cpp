@@ -62,13 +62,15 @@ NamedFidelity compare_one(const CompareArgs& args, const World& world, const Cam
   write_file_atomically(stem + ".json", labelled_json(label, summary).dump(2) + "\n");
   if (!args.json)
     std::printf("compare %s: %zu frames, differing pixels mean %.4f%% (max %.4f%%), PSNR %s dB,\n"
-                "  visible objects missed %llu of %llu (recall %.4f; drawn but covering no pixel: %llu),\n"
+                "  visible objects missed %llu of %llu (recall %.4f; drawn but covering no pixel: %llu;\n"
+                "  the largest covered %llu pixels of truth),\n"
                 "  pixel error max %.2f px, p99.9 %.2f px (frames over 1 px: %.1f%%, %.1f%%);\n"
                 "  wrote %s.csv\n",
                 label.c_str(), summary.frames, 100 * summary.mean_differing_fraction,
                 100 * summary.max_differing_fraction, psnr_text(summary.mean_psnr_db).c_str(),
                 (unsigned long long)summary.missed_objects, (unsigned long long)summary.visible_objects,
-                summary.recall, (unsigned long long)summary.missed_drawn, summary.max_pixel_error_px, summary.max_pixel_error_p999_px,
+                summary.recall, (unsigned long long)summary.missed_drawn,
+                (unsigned long long)summary.largest_missed_pixels, summary.max_pixel_error_px, summary.max_pixel_error_p999_px,
                 100 * summary.pixel_error_over_1px_fraction,
                 100 * summary.pixel_error_p999_over_1px_fraction, stem.c_str());
   return {label, summary};
@@ -80,11 +82,11 @@ std::string comparison_table(const std::vector<NamedFidelity>& runs) {
     rows.push_back({name, std::to_string(s.frames), bench::fixed(100 * s.mean_differing_fraction, 3),
                     bench::fixed(100 * s.max_differing_fraction, 3), psnr_text(s.mean_psnr_db),
                     std::to_string(s.missed_objects) + " of " + std::to_string(s.visible_objects),
-                    bench::fixed(s.recall, 4), std::to_string(s.missed_drawn),
+                    bench::fixed(s.recall, 4), std::to_string(s.missed_drawn) + " (largest " + std::to_string(s.largest_missed_pixels) + " px)",
                     pixel_error_text(s.max_pixel_error_px, s.pixel_error_over_1px_fraction),
                     pixel_error_text(s.max_pixel_error_p999_px, s.pixel_error_p999_over_1px_fraction)});
   return bench::md_table({"strategy", "frames compared", "differing pixels mean %", "max %", "PSNR dB",
-                          "visible objects missed", "recall", "of the missed, drawn", "pixel error max px (frames > 1 px)",
+                          "visible objects missed", "recall", "of the missed, drawn (largest in truth)", "pixel error max px (frames > 1 px)",
                           "p99.9 px (frames > 1 px)"},
                          rows);
 }

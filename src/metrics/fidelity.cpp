@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 #include <unordered_set>
 
 #include <nlohmann/json.hpp>
@@ -42,12 +43,16 @@ FidelityFrame compare_images(const Image& truth, const IdImage& truth_ids, const
   f.differing_fraction = pixels ? double(differing) / double(pixels) : 0.0;
   const double mse = pixels ? squared / (3.0 * double(pixels)) : 0.0;
   f.psnr_db = mse > 0 ? 10.0 * std::log10(255.0 * 255.0 / mse) : std::numeric_limits<double>::infinity();
-  std::unordered_set<uint32_t> seen_truth(truth_ids.ids.begin(), truth_ids.ids.end());
+  std::unordered_map<uint32_t, uint64_t> truth_pixels;  // per id shown, its pixels
+  for (uint32_t id : truth_ids.ids) ++truth_pixels[id];
+  truth_pixels.erase(kBackgroundId);
   std::unordered_set<uint32_t> seen_test(test_ids.ids.begin(), test_ids.ids.end());
-  seen_truth.erase(kBackgroundId);
-  f.visible_objects = seen_truth.size();
-  for (uint32_t id : seen_truth)
-    if (!seen_test.count(id)) f.missed_ids.push_back(id);
+  f.visible_objects = truth_pixels.size();
+  for (const auto& [id, count] : truth_pixels)
+    if (!seen_test.count(id)) {
+      f.missed_ids.push_back(id);
+      f.largest_missed_pixels = std::max(f.largest_missed_pixels, count);
+    }
   std::sort(f.missed_ids.begin(), f.missed_ids.end());
   f.missed_objects = f.missed_ids.size();
   f.width = truth.width;
@@ -125,6 +130,7 @@ FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
     s.visible_objects += f.visible_objects;
     s.missed_objects += f.missed_objects;
     s.missed_drawn += f.missed_drawn;
+    s.largest_missed_pixels = std::max(s.largest_missed_pixels, f.largest_missed_pixels);
     if (std::isfinite(f.psnr_db)) mse_sum += kPeak / std::pow(10.0, f.psnr_db / 10.0);
     s.max_pixel_error_px = std::max(s.max_pixel_error_px, f.pixel_error_max_px());
     s.max_pixel_error_p999_px = std::max(s.max_pixel_error_p999_px, f.pixel_error_p999_px());
@@ -156,7 +162,7 @@ void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::str
   };
   for (const FidelityFrame& f : frames) {
     out << f.frame << ',' << f.differing_fraction << ',' << f.psnr_db << ',' << f.visible_objects << ','
-        << f.missed_objects << ',' << f.missed_drawn;
+        << f.missed_objects << ',' << f.missed_drawn << ',' << f.largest_missed_pixels;
     write_pixel_error(f.test_to_truth);
     write_pixel_error(f.truth_to_test);
     // Where the frame's pixel error is largest (the worse direction), and which objects it
@@ -185,6 +191,7 @@ std::string to_json(const FidelitySummary& s) {
                               {"visible_objects", s.visible_objects},
                               {"missed_objects", s.missed_objects},
                               {"missed_drawn", s.missed_drawn},
+                              {"largest_missed_pixels", s.largest_missed_pixels},
                               {"recall", s.recall},
                               {"pixel_error",
                                {{"max_px", s.max_pixel_error_px},

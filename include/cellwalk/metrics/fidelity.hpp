@@ -27,6 +27,7 @@ struct FidelityFrame {
   uint64_t visible_objects = 0;     // distinct ids in the ground-truth id buffer
   uint64_t missed_objects = 0;      // of those, absent from the strategy's id buffer
   std::vector<uint32_t> missed_ids; // their pixel ids (renderer.hpp pixel_id), ascending
+  uint64_t largest_missed_pixels = 0;  // the most pixels of truth any of them covers; 0 if none
   // Of the missed, those the strategy did draw, as objects at a coarser level than truth's:
   // their pixels fell to a sub-pixel shift of their own level or a neighbour's (an object seen
   // through a slit one pixel wide), not to the visible set. Set by compare(), not compare_images.
@@ -65,6 +66,7 @@ struct FidelitySummary {
   double mean_psnr_db = 0.0;  // PSNR of the mean squared error over all frames; infinity if none differ
   uint64_t visible_objects = 0, missed_objects = 0;
   uint64_t missed_drawn = 0;  // of the missed, those drawn (FidelityFrame::missed_drawn)
+  uint64_t largest_missed_pixels = 0;  // over the frames
   double recall = 1.0;        // 1 - missed / visible over all compared frames
   // Pixel error (the worse direction of each frame): the largest over frames of the frame's
   // maximum and of its 99.9th percentile, and the fraction of frames where each exceeds 1 px.
