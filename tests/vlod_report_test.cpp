@@ -3,8 +3,6 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 
 #include "test_support.hpp"
 
@@ -12,10 +10,8 @@ namespace cellwalk {
 namespace {
 
 std::string slurp(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
+  const std::vector<uint8_t> bytes = test::slurp(file.string());
+  return std::string(bytes.begin(), bytes.end());
 }
 
 // The whole bench at a tiny scale: every report file is written and the figures hold what
