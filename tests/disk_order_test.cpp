@@ -1,8 +1,7 @@
 // Tests of the disk order (vLOD §3, digest 001 §3.5): total runs against a bit-string count,
 // Hamming against dense vectors, exact k-NN lists against all pairs, the heuristic against the
 // best of all permutations on small matrices and on planted consecutive-ones matrices.
-// DiskOrder.DISABLED_Table1 prints the seed's Table 1 for synthetic matrices:
-//   cellwalk_tests --gtest_also_run_disabled_tests --gtest_filter='DiskOrder.DISABLED_Table1'
+// The seed's Table 1 on planted matrices is `cellwalk bench disk-order`.
 #include "cellwalk/visibility/disk_order.hpp"
 
 #include <gtest/gtest.h>
@@ -17,6 +16,7 @@
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/random.hpp"
+#include "experiments/disk_order/planted_matrix.hpp"
 
 namespace cellwalk::visibility {
 namespace {
@@ -57,28 +57,6 @@ bool is_permutation_of(const std::vector<uint32_t>& order, uint32_t n) {
   return sorted == identity_order(n);
 }
 
-// A consecutive-ones matrix under a hidden order: each row an interval of 1 to max_length
-// positions; with `noise`, a row also holds one random column elsewhere. The column ids are
-// shuffled, so the identity order is a random one.
-struct Planted {
-  Rows rows;
-  std::vector<uint32_t> hidden;  // hidden[k] = the column at position k of the planted order
-};
-
-Planted planted(uint32_t columns, uint32_t rows, uint32_t max_length, double noise, uint64_t seed) {
-  Random random(seed);
-  Planted p{Rows(rows), shuffled(random, columns)};
-  for (auto& row : p.rows) {
-    const uint32_t first = uint32_t(random.integer(0, columns - 1));
-    const uint32_t last =
-        std::min(columns - 1, first + uint32_t(random.integer(1, max_length)) - 1);
-    for (uint32_t k = first; k <= last; ++k) row.push_back(p.hidden[k]);
-    if (random.chance(noise)) row.push_back(uint32_t(random.integer(0, columns - 1)));
-    std::sort(row.begin(), row.end());
-    row.erase(std::unique(row.begin(), row.end()), row.end());
-  }
-  return p;
-}
 
 TEST(DiskOrder, TotalRunsOfTheDigestsExample) {
   const std::string bits = "0011100111010";
@@ -179,7 +157,7 @@ TEST(DiskOrder, ExactListsAreTheBruteForceNearestWithTiesByTheSmallerId) {
 }
 
 TEST(DiskOrder, SampledListsHoldTrueDistancesAndAreExactWhenTheSampleIsEverything) {
-  const Planted p = planted(400, 800, 20, 0.3, 5);
+  const PlantedMatrix p = planted_matrix(400, 800, 20, 0.3, 5);
   const SparseColumns m = columns_from_rows(p.rows, 400);
   DiskOrderOptions options;
   options.use_sampling = true;
@@ -267,7 +245,7 @@ TEST(DiskOrder, SmallMatricesNeverLoseToTheSeedTourAndOftenReachTheOptimum) {
 // comes close to one run per row, from many more in the shuffled order.
 void expect_recovers_planted_order(bool use_sampling) {
   const uint32_t columns = 600, row_count = 1500;
-  const Planted p = planted(columns, row_count, 30, 0.0, 7);
+  const PlantedMatrix p = planted_matrix(columns, row_count, 30, 0.0, 7);
   const SparseColumns m = columns_from_rows(p.rows, columns);
   ASSERT_EQ(total_runs(p.rows, p.hidden), row_count);
   DiskOrderOptions options;
@@ -292,7 +270,7 @@ TEST(DiskOrder, RecoversAPlantedConsecutiveOnesOrderWithSampledLists) {
 }
 
 TEST(DiskOrder, AnInitialSeedTourIsOnlyImproved) {
-  const Planted p = planted(300, 700, 25, 0.2, 8);
+  const PlantedMatrix p = planted_matrix(300, 700, 25, 0.2, 8);
   const SparseColumns m = columns_from_rows(p.rows, 300);
   DiskOrderOptions options;
   options.seed_tour = SeedTour::kInitial;
@@ -304,7 +282,7 @@ TEST(DiskOrder, AnInitialSeedTourIsOnlyImproved) {
 }
 
 TEST(DiskOrder, TheSameSeedGivesTheSameOrderOnAnyThreadCount) {
-  const Planted p = planted(500, 1200, 25, 0.3, 9);
+  const PlantedMatrix p = planted_matrix(500, 1200, 25, 0.3, 9);
   const SparseColumns m = columns_from_rows(p.rows, 500);
   for (bool use_sampling : {false, true}) {
     DiskOrderOptions options;
@@ -383,38 +361,6 @@ TEST(DiskOrder, MortonOrderSortsByInterleavedBits) {
   EXPECT_EQ(morton_order(corners), (std::vector<uint32_t>{1, 6, 3, 4, 5, 2, 7, 0}));
   EXPECT_TRUE(morton_order(std::vector<std::array<float, 3>>{}).empty());
   EXPECT_EQ(morton_order(std::vector<std::array<float, 3>>{{3, 3, 3}, {3, 3, 3}}), (std::vector<uint32_t>{0, 1}));
-}
-
-TEST(DiskOrder, DISABLED_Table1) {
-  std::printf("%-6s %-5s %-7s %7s %9s %8s %7s %8s %10s %8s %11s\n", "size", "rows", "lists", "rows",
-              "knn_s", "seed_s", "Imp1", "Imp_many", "iterations", "first_s", "s_per_iter");
-  for (uint32_t columns : {500u, 1000u, 3000u, 9000u, 27000u}) {
-    for (bool long_rows : {false, true}) {
-      const Planted p = long_rows ? planted(columns, columns / 2, 1000, 0.5, columns)
-                                  : planted(columns, 4 * columns, 60, 0.5, columns);
-      const SparseColumns m = columns_from_rows(p.rows, columns);
-      for (bool use_sampling : {false, true}) {
-        DiskOrderOptions options;
-        options.use_sampling = use_sampling;
-        options.max_iterations = 100000;
-        options.max_seconds = 10;
-        DiskOrderReport r;
-        const std::vector<uint32_t> order = disk_order(m, identity_order(columns), options, &r);
-        EXPECT_EQ(r.runs_final, total_runs(p.rows, order));
-        std::printf("%-6u %-5s %-7s %7zu %9.3f %8.3f %7.2f %8.2f %10u %8.3f %11.6f\n", columns,
-                    long_rows ? "long" : "short", use_sampling ? "sampled" : "exact", p.rows.size(),
-                    r.knn_seconds, r.seed_tour_seconds, r.improvement_first(),
-                    r.improvement_final(), r.iterations, r.first_iteration_seconds,
-                    r.seconds_per_later_iteration());
-        std::printf("       runs: original %llu, seed %llu, first %llu, final %llu; planted %llu\n",
-                    (unsigned long long)r.runs_original, (unsigned long long)r.runs_after_seed,
-                    (unsigned long long)r.runs_after_first_iteration,
-                    (unsigned long long)r.runs_final,
-                    (unsigned long long)total_runs(p.rows, p.hidden));
-        std::fflush(stdout);
-      }
-    }
-  }
 }
 
 }  // namespace

@@ -1,3 +1,4 @@
+#include "experiments/disk_order/disk_order_report.hpp"
 #include "experiments/vlod/vlod_report.hpp"
 
 #include <gtest/gtest.h>
@@ -91,6 +92,30 @@ TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
     for (const auto& r : w["walks"]["normal"]) refused += r.contains("refused") ? 1 : 0;
   EXPECT_GT(refused, 0u);
   EXPECT_NE(slurp(std::filesystem::path(p.out_dir) / "vlod.md").find("refused: "), std::string::npos);
+}
+
+// Table 1 at small sizes: every run is in the report, beside the seed's row where the seed has
+// one, and the order found never has more runs than the random one it started from.
+TEST(DiskOrderBench, WritesTable1) {
+  const test::TempDir dir;
+  DiskOrderBenchParams p;
+  p.sizes = {120, 500};
+  p.max_iterations = 300;
+  p.max_seconds = 1;
+  p.out_dir = dir.file("results");
+  p.command_line = "cellwalk bench disk-order --sizes 120 500";
+  const nlohmann::ordered_json s = run_disk_order_bench(p);
+  ASSERT_EQ(s["runs"].size(), 8u);  // 2 sizes × short/long rows × exact/sampled lists
+  for (const auto& r : s["runs"]) {
+    EXPECT_GT(r["imp1"].get<double>(), 1.0);
+    EXPECT_GE(r["imp_final"].get<double>(), r["imp1"].get<double>());
+    EXPECT_GE(r["runs_final"].get<uint64_t>(), 1u);
+  }
+  const std::string md = slurp(std::filesystem::path(p.out_dir) / "disk-order.md");
+  EXPECT_NE(md.find(p.command_line), std::string::npos);
+  EXPECT_NE(md.find("| 500 | short | exact |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| 3.1 | 6.28 |"), std::string::npos) << "the seed's row for 500 columns";
+  EXPECT_GT(std::filesystem::file_size(std::filesystem::path(p.out_dir) / "disk-order" / "table1.csv"), 0u);
 }
 
 }  // namespace

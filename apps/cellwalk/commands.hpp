@@ -25,5 +25,6 @@ void register_bench_review(CLI::App& bench, std::string (*command_line)());
 void register_bench_visual(CLI::App& bench, std::string (*command_line)());
 void register_bench_visibility(CLI::App& bench, std::string (*command_line)());
 void register_bench_vlod(CLI::App& bench, std::string (*command_line)());
+void register_bench_disk_order(CLI::App& bench, std::string (*command_line)());
 
 }  // namespace cellwalk::app
