@@ -484,8 +484,8 @@ std::string report(const VlodBenchParams& p, const Json& machine, const Tables& 
   md += "\n## Tightness against 125-point sampling\n\n" + bench::md_table(kTightnessHeader, t.tightness, bench::Align::kFigures);
   md += "\nSeed: vLOD's sets 2–10× the sampled ones.\n";
   md += "\n## Precompute\n\n" + bench::md_table(kPrecomputeHeader, t.precompute, bench::Align::kFigures);
-  md += "\nTable 1 (the disk order's kNN, seed tour and improvement times at 500–27,000 columns) is in docs/vlod.md, "
-        "from `DiskOrder.DISABLED_Table1`.\n";
+  md += "\nTable 1 (the disk order's kNN, seed tour and improvement times at 500–27,000 columns) is "
+        "`cellwalk bench disk-order`, [disk-order.md](disk-order.md).\n";
   return md;
 }
 
