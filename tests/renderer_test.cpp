@@ -353,6 +353,21 @@ TEST_F(RendererTest, MeshLargerThanTheBudgetIsDrawnButNotKept) {
   EXPECT_EQ(stats.gpu_misses, 1u);
 }
 
+// An object whose level has no triangles (every piece culled) is drawn as nothing, and its
+// neighbours as ever. Under the sanitizers this caught a copy from a null index array.
+TEST_F(RendererTest, EmptyMeshDrawsNothingAndLeavesTheOthersAlone) {
+  Meshes meshes;
+  meshes.add(0, Mesh{});
+  meshes.add(1, make_box(Vec3(0.0f), Vec3(1.0f)));
+  std::vector<DrawItem> items{{0}, {1}};
+  Renderer renderer(settings());
+  RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.triangles, 12u);
+  IdImage ids = renderer.read_ids();
+  EXPECT_EQ(std::count(ids.ids.begin(), ids.ids.end(), 1u), 0);
+  EXPECT_EQ(id_at(ids, kWidth / 2, kHeight / 2), 2u);
+}
+
 TEST_F(RendererTest, ProviderReturningNullSkipsTheItemUntilItsDataIsReady) {
   Meshes meshes;
   meshes.add(1, make_box(Vec3(-2.0f, 0.0f, 0.0f), Vec3(1.0f)));

@@ -69,7 +69,10 @@ GpuMesh::GpuMesh(const Mesh& mesh)
   auto* out = static_cast<uint8_t*>(
       glMapNamedBufferRange(buffer_, 0, size, GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT));
   interleave(mesh, normals, stride_, out);
-  std::memcpy(out + index_offset_, mesh.indices.data(), sizeof(uint32_t) * mesh.indices.size());
+  // REQUIRES a non-null source even for zero bytes: an empty mesh's vector may have none.
+  if (!mesh.indices.empty()) {
+    std::memcpy(out + index_offset_, mesh.indices.data(), sizeof(uint32_t) * mesh.indices.size());
+  }
   glUnmapNamedBuffer(buffer_);
 }
 
