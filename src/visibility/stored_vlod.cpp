@@ -15,7 +15,8 @@ namespace cellwalk::visibility {
 
 namespace {
 
-constexpr uint32_t kVlodVersion = 1;
+// 2: pieces numbered in the geometry section's byte order (1: in the level table's order).
+constexpr uint32_t kVlodVersion = 2;
 constexpr uint8_t kHasVlod = 1;
 
 // Cells within `steps` face steps of `from` over cells with a vLOD (BFS).
@@ -70,19 +71,20 @@ std::vector<uint32_t> morton_piece_order(const World& world, const PieceTable& p
   return morton_order(centres);
 }
 
-// The pieces in the order their encoded levels lie in the geometry section.
-std::vector<uint32_t> file_piece_order(const World& world, const PieceTable& pieces) {
-  std::vector<uint32_t> order = identity_order(uint32_t(pieces.count()));
-  auto offset = [&](uint32_t p) { return world.lod(pieces.object(p), pieces.level(p)).offset; };
-  std::stable_sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) { return offset(a) < offset(b); });
-  return order;
+// Every level's offset in the geometry section, each object's levels in turn.
+std::vector<uint64_t> level_offsets(const World& world) {
+  std::vector<uint64_t> offsets;
+  for (ObjectId id = 0; id < world.object_count(); ++id)
+    for (uint32_t level = 0; level < world.object(id).lod_count; ++level) offsets.push_back(world.lod(id, level).offset);
+  return offsets;
 }
 
 // R(M) of the crossings' additions in the file's layout, the Morton order (the seed's baseline)
 // and the TSP order (its search bounded to seconds).
 PieceOrders measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, const World& world,
                                const PieceTable& table, VlodSizes& sizes) {
-  PieceOrders orders{file_piece_order(world, table), morton_piece_order(world, table), {}};
+  // Pieces are numbered in the file's byte order: its layout is the identity.
+  PieceOrders orders{identity_order(uint32_t(table.count())), morton_piece_order(world, table), {}};
   sizes.runs_world_order = total_runs(rows, orders.file);
   sizes.runs_morton_order = total_runs(rows, orders.morton);
   DiskOrderOptions options;
@@ -97,37 +99,71 @@ PieceOrders measure_disk_order(const std::vector<std::vector<uint32_t>>& rows, c
   return orders;
 }
 
-// The geometry section with the levels in `order`, and the lods section with each entry's offset
-// moved with its level (the offset is an entry's first 8 bytes, docs/format.md).
-std::vector<NamedSection> laid_out_geometry(const World& world, const PieceTable& pieces,
-                                            const std::vector<uint32_t>& order) {
-  constexpr size_t kLodEntry = 24;
-  std::vector<uint8_t> lods = world.file().read_all("lods");
-  std::vector<uint64_t> offsets(pieces.count());
+// Each level's offset (as level_offsets() orders them) once the levels lie in `order`.
+std::vector<uint64_t> offsets_in_order(const World& world, const PieceTable& pieces, const std::vector<uint32_t>& order) {
+  std::vector<uint64_t> first(world.object_count() + 1, 0);
+  for (ObjectId id = 0; id < world.object_count(); ++id) first[id + 1] = first[id] + world.object(id).lod_count;
+  std::vector<uint64_t> offsets(first.back());
   uint64_t at = 0;
   for (uint32_t p : order) {
-    offsets[p] = at;
+    offsets[first[pieces.object(p)] + pieces.level(p)] = at;
     at += world.lod(pieces.object(p), pieces.level(p)).bytes;
   }
-  for (PieceId p = 0; p < pieces.count(); ++p) {
-    const uint64_t entry = world.object(pieces.object(p)).first_lod + pieces.level(p);
-    if ((entry + 1) * kLodEntry > lods.size()) fail(world.file().path(), "section lods is shorter than its objects say (the file is damaged)");
-    for (int b = 0; b < 8; ++b) lods[entry * kLodEntry + size_t(b)] = uint8_t(offsets[p] >> (8 * b));
-  }
+  return offsets;
+}
+
+// The geometry section with the levels in `order`, and the lods section with each entry's offset
+// moved with its level to `offsets` (offsets_in_order; an entry's first 8 bytes, docs/format.md).
+std::vector<NamedSection> laid_out_geometry(const World& world, const PieceTable& pieces,
+                                            const std::vector<uint32_t>& order, const std::vector<uint64_t>& offsets) {
+  constexpr size_t kLodEntry = 24;
+  std::vector<uint8_t> lods = world.file().read_all("lods");
+  size_t slot = 0;
+  for (ObjectId id = 0; id < world.object_count(); ++id)
+    for (uint32_t level = 0; level < world.object(id).lod_count; ++level, ++slot) {
+      const uint64_t entry = world.object(id).first_lod + level;
+      if ((entry + 1) * kLodEntry > lods.size()) fail(world.file().path(), "section lods is shorter than its objects say (the file is damaged)");
+      for (int b = 0; b < 8; ++b) lods[entry * kLodEntry + size_t(b)] = uint8_t(offsets[slot] >> (8 * b));
+    }
   NamedSection geometry{"geometry", {}, [&world, &pieces, order](WorldWriter& w) {
                           for (uint32_t p : order) w.write(world.read_level(pieces.object(p), pieces.level(p)));
                         }};
   return {std::move(geometry), {"lods", std::move(lods), {}}};
 }
 
+// The ids in `ids` renumbered by `to` (old id -> new), ascending.
+void renumber(std::vector<PieceId>& ids, const std::vector<PieceId>& to) {
+  for (PieceId& p : ids) p = to[p];
+  std::sort(ids.begin(), ids.end());
+}
+
 }  // namespace
 
-PieceTable::PieceTable(const World& world) {
+PieceTable::PieceTable(const World& world) : PieceTable(world, level_offsets(world)) {}
+
+PieceTable::PieceTable(const World& world, std::span<const uint64_t> offsets) {
   first_.reserve(world.object_count());
+  std::vector<std::pair<ObjectId, uint32_t>> levels;  // in object and level order
   for (ObjectId id = 0; id < world.object_count(); ++id) {
-    first_.push_back(uint32_t(owner_.size()));
-    owner_.insert(owner_.end(), world.object(id).lod_count, id);
+    first_.push_back(uint32_t(levels.size()));
+    for (uint32_t level = 0; level < world.object(id).lod_count; ++level) levels.push_back({id, level});
   }
+  if (offsets.size() != levels.size()) fail(world.file().path(), "offsets for " + std::to_string(offsets.size()) + " levels, the world has " + std::to_string(levels.size()));
+  std::vector<uint32_t> by_offset = identity_order(uint32_t(levels.size()));
+  std::stable_sort(by_offset.begin(), by_offset.end(), [&](uint32_t a, uint32_t b) { return offsets[a] < offsets[b]; });
+  piece_.resize(levels.size());
+  object_.reserve(levels.size());
+  level_.reserve(levels.size());
+  for (uint32_t slot : by_offset) {
+    piece_[slot] = PieceId(object_.size());
+    object_.push_back(levels[slot].first);
+    level_.push_back(levels[slot].second);
+  }
+}
+
+uint64_t PieceTable::resident_bytes() const {
+  return first_.capacity() * sizeof(uint32_t) + piece_.capacity() * sizeof(PieceId) +
+         object_.capacity() * sizeof(ObjectId) + level_.capacity() * sizeof(uint32_t);
 }
 
 std::vector<PieceId> vlod_pieces(const World& world, const PieceTable& pieces, const ViewCellPartition& partition,
@@ -136,26 +172,69 @@ std::vector<PieceId> vlod_pieces(const World& world, const PieceTable& pieces, c
   out.reserve(set.size());
   const Aabb& box = partition.cell(cell).box;
   for (ObjectId id : set) out.push_back(pieces.piece(id, cell_level(world, id, box, rule)));
-  return out;  // ascending: objects ascend and an object's pieces are consecutive
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
-std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
-                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing,
-                                         PieceOrders* orders) {
-  const PieceTable pieces(world);
+namespace {
+
+// Every cell's vLOD and which cells are key cells.
+struct CellVlods {
+  std::vector<std::vector<PieceId>> vlod;  // per cell, ascending; empty without one
+  std::vector<bool> has, key;
+};
+
+CellVlods cell_vlods(const World& world, const PieceTable& pieces, const ViewCellPartition& partition,
+                     const CellSets& sets, const CellLodRule& rule, int key_spacing, VlodSizes& sizes) {
   const size_t cells = partition.cell_count();
-  std::vector<std::vector<PieceId>> vlod(cells);
-  std::vector<bool> has(cells, false), key(cells, false);
+  CellVlods v{std::vector<std::vector<PieceId>>(cells), std::vector<bool>(cells, false), std::vector<bool>(cells, false)};
   for (const auto& [c, set] : sets) {
-    vlod[c] = vlod_pieces(world, pieces, partition, c, set.objects, rule);
-    has[c] = true;
-    sizes.vlod_ids += vlod[c].size();
+    v.vlod[c] = vlod_pieces(world, pieces, partition, c, set.objects, rule);
+    v.has[c] = true;
+    sizes.vlod_ids += v.vlod[c].size();
     ++sizes.cells_with_vlod;
   }
   for (CellId c = 0; c < cells; ++c)
-    if (has[c] && !key_within(partition, has, key, c, key_spacing)) key[c] = true;
+    if (v.has[c] && !key_within(partition, v.has, v.key, c, key_spacing)) v.key[c] = true;
+  return v;
+}
 
-  std::vector<std::vector<uint32_t>> added_rows;  // §3's matrix: what each crossing adds
+// The Δ of a shared face, stored once, from the lower cell id to the higher.
+struct FaceDelta {
+  CellId from, to;
+  VlodDelta d;
+};
+
+// In the order the records are written: by `from`, then its faces' order.
+std::vector<FaceDelta> face_deltas(const ViewCellPartition& partition, const CellVlods& v) {
+  std::vector<FaceDelta> out;
+  for (CellId c = 0; c < partition.cell_count(); ++c) {
+    if (!v.has[c]) continue;
+    for (CellId n : partition.face_neighbours(c)) {
+      if (n <= c || !v.has[n]) continue;
+      FaceDelta f{c, n, {}};
+      std::set_difference(v.vlod[n].begin(), v.vlod[n].end(), v.vlod[c].begin(), v.vlod[c].end(), std::back_inserter(f.d.added));
+      std::set_difference(v.vlod[c].begin(), v.vlod[c].end(), v.vlod[n].begin(), v.vlod[n].end(), std::back_inserter(f.d.removed));
+      out.push_back(std::move(f));
+    }
+  }
+  return out;
+}
+
+// §3's matrix: the pieces each crossing adds (A one way, R the other).
+std::vector<std::vector<uint32_t>> added_rows(const std::vector<FaceDelta>& deltas) {
+  std::vector<std::vector<uint32_t>> rows;
+  for (const FaceDelta& f : deltas)
+    for (const std::vector<PieceId>* row : {&f.d.added, &f.d.removed})
+      if (!row->empty()) rows.push_back(*row);
+  return rows;
+}
+
+// The section (docs/format.md): header, index of the cells and their faces, then the records,
+// each key cell's vLOD before the Δs of its faces to higher cells.
+std::vector<uint8_t> encode_section(const ViewCellPartition& partition, const CellLodRule& rule, uint64_t piece_count,
+                                    const CellVlods& v, const std::vector<FaceDelta>& deltas, VlodSizes& sizes) {
+  const size_t cells = partition.cell_count();
   std::vector<uint8_t> records;
   struct FaceEntry {
     CellId neighbour;
@@ -165,47 +244,40 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
   };
   std::vector<std::vector<FaceEntry>> faces(cells);
   std::vector<std::pair<uint64_t, uint32_t>> key_records(cells, {0, 0});
+  size_t next = 0;
   for (CellId c = 0; c < cells; ++c) {
-    if (!has[c]) continue;
-    if (key[c]) {
+    if (v.key[c]) {
       const uint64_t at = records.size();
-      append_record(records, {vlod[c]});
+      append_record(records, {v.vlod[c]});
       key_records[c] = {at, uint32_t(records.size() - at)};
       sizes.keyframe_bytes += records.size() - at;
       ++sizes.keyframes;
     }
-    for (CellId n : partition.face_neighbours(c)) {
-      if (n <= c || !has[n]) continue;
-      VlodDelta d;
-      std::set_difference(vlod[n].begin(), vlod[n].end(), vlod[c].begin(), vlod[c].end(), std::back_inserter(d.added));
-      std::set_difference(vlod[c].begin(), vlod[c].end(), vlod[n].begin(), vlod[n].end(), std::back_inserter(d.removed));
+    for (; next < deltas.size() && deltas[next].from == c; ++next) {
+      const VlodDelta& d = deltas[next].d;
       const uint64_t at = records.size();
       append_record(records, {d.added, d.removed});
       const uint32_t bytes = uint32_t(records.size() - at);
-      faces[c].push_back({n, true, at, bytes});
-      faces[n].push_back({c, false, at, bytes});
+      faces[c].push_back({deltas[next].to, true, at, bytes});
+      faces[deltas[next].to].push_back({c, false, at, bytes});
       ++sizes.face_pairs;
       sizes.delta_ids += d.added.size() + d.removed.size();
       sizes.delta_bytes += bytes;
-      sizes.bitmask_bytes += 2 * ((pieces.count() + 7) / 8);
+      sizes.bitmask_bytes += 2 * ((piece_count + 7) / 8);
       sizes.list_bytes += 4 * (d.added.size() + d.removed.size());
       for (size_t i = 0; i < std::size(kIdCodecs); ++i)
         sizes.codec_bytes[i] += 1 + encoded_size(kIdCodecs[i], d.added) + encoded_size(kIdCodecs[i], d.removed);
-      for (std::vector<PieceId>* row : {&d.added, &d.removed})
-        if (!row->empty()) added_rows.push_back(std::move(*row));
     }
   }
-  PieceOrders measured = measure_disk_order(added_rows, world, pieces, sizes);
-  if (orders) *orders = std::move(measured);
   ByteWriter index;
   const std::vector<uint8_t> cells_bytes = serialize_partition(partition);
   index.put(uint64_t(cells_bytes.size()));
   index.put_array(std::span<const uint8_t>(cells_bytes));
   index.put_string(to_string(rule));
   index.put(uint32_t(cells));
-  index.put(uint32_t(pieces.count()));
+  index.put(uint32_t(piece_count));
   for (CellId c = 0; c < cells; ++c) {
-    index.put(uint8_t(has[c] ? kHasVlod : 0));
+    index.put(uint8_t(v.has[c] ? kHasVlod : 0));
     index.put(key_records[c].first);
     index.put(key_records[c].second);
     index.put(uint32_t(faces[c].size()));
@@ -226,6 +298,8 @@ std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellParti
   return std::move(out.bytes());
 }
 
+}  // namespace
+
 std::string disk_layout_name(DiskLayout layout) {
   switch (layout) {
     case DiskLayout::kKeep: return "keep";
@@ -244,23 +318,35 @@ DiskLayout parse_disk_layout(const std::string& name) {
 }
 
 VlodSizes write_world_with_vlod(const World& world, const std::string& out, const ViewCellPartition& partition,
-                                const CellSets& sets, const CellLodRule& rule, DiskLayout layout) {
+                                const CellSets& sets, const CellLodRule& rule, DiskLayout layout, int key_spacing,
+                                PieceOrders* orders) {
   for (CellId c = 0; c < partition.cell_count(); ++c)
     if (partition.cell(c).computed() && !sets.count(c))
       fail("pvs", "cell " + std::to_string(c) + " has no vLOD; compute or merge every shard first");
   VlodSizes sizes;
-  PieceOrders orders;
-  std::vector<NamedSection> sections{{kVlodSection, encode_vlod_section(world, partition, sets, rule, sizes, 3, &orders), {}}};
+  const PieceTable pieces(world);  // outlives the geometry's writer
+  CellVlods vlods = cell_vlods(world, pieces, partition, sets, rule, key_spacing, sizes);
+  std::vector<FaceDelta> deltas = face_deltas(partition, vlods);
+  PieceOrders measured = measure_disk_order(added_rows(deltas), world, pieces, sizes);
   sizes.runs_written = layout == DiskLayout::kKeep     ? sizes.runs_world_order
                        : layout == DiskLayout::kMorton ? sizes.runs_morton_order
                                                        : sizes.runs_tsp_order;
-  const PieceTable pieces(world);  // outlives the geometry's writer
+  std::vector<NamedSection> geometry;
   if (layout != DiskLayout::kKeep) {
-    std::vector<NamedSection> geometry =
-        laid_out_geometry(world, pieces, layout == DiskLayout::kMorton ? orders.morton : orders.tsp);
-    std::move(geometry.begin(), geometry.end(), std::back_inserter(sections));
+    // §2.4: the pieces renumbered in the new layout, so its runs are runs of ids.
+    const std::vector<uint32_t>& order = layout == DiskLayout::kMorton ? measured.morton : measured.tsp;
+    const std::vector<uint64_t> offsets = offsets_in_order(world, pieces, order);
+    const PieceTable laid_out(world, offsets);
+    std::vector<PieceId> to(pieces.count());
+    for (PieceId p = 0; p < pieces.count(); ++p) to[p] = laid_out.piece(pieces.object(p), pieces.level(p));
+    for (std::vector<PieceId>& v : vlods.vlod) renumber(v, to);
+    for (FaceDelta& f : deltas) renumber(f.d.added, to), renumber(f.d.removed, to);
+    geometry = laid_out_geometry(world, pieces, order, offsets);
   }
+  std::vector<NamedSection> sections{{kVlodSection, encode_section(partition, rule, pieces.count(), vlods, deltas, sizes), {}}};
+  std::move(geometry.begin(), geometry.end(), std::back_inserter(sections));
   write_world_sections(world, out, sections);
+  if (orders) *orders = std::move(measured);
   return sizes;
 }
 
@@ -348,8 +434,7 @@ std::vector<CellId> StoredVlod::neighbours(CellId cell) const {
 }
 
 uint64_t StoredVlod::resident_bytes() const {
-  uint64_t bytes = cells_.size() * sizeof(Cell) + pieces_.count() * sizeof(ObjectId) +
-                   world_.object_count() * sizeof(uint32_t) +
+  uint64_t bytes = cells_.size() * sizeof(Cell) + pieces_.resident_bytes() +
                    partition_->cell_count() * (sizeof(ViewCell) + 6 * sizeof(CellId));
   for (const Cell& c : cells_) bytes += c.faces.capacity() * sizeof(Face);
   return bytes;

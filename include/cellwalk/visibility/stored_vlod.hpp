@@ -1,8 +1,10 @@
 // The stored vLODs of a world (section "vlod"; docs/format.md, "The vlod section"): per shared
 // face, the Δ between the two cells' vLODs, and full vLODs for sparse key cells, for start-up
 // and teleports (seed 001 §2.3–§2.4; digest 001 §3.3, §4 and its [ours] keyframes).
-// An id of a vLOD is a *piece*: one level of one object, numbered as the world's level table
-// (object.first_lod + level), so a cell change that only coarsens an object is a Δ too.
+// An id of a vLOD is a *piece*: one level of one object, so a cell change that only coarsens an
+// object is a Δ too. Pieces are numbered in the order their encoded levels lie in the geometry
+// section (§2.4's renumbering): once §3's layout is applied, the pieces a crossing adds are runs
+// of consecutive ids, which the run codecs store as one.
 // Depends on the store only (no Embree, no GL), so a server can stream Δs.
 #pragma once
 
@@ -26,18 +28,25 @@ inline constexpr const char* kVlodSection = "vlod";
 
 using PieceId = uint32_t;
 
-// The pieces of every object's levels in the world's level table order, and back.
+// The pieces of every object's levels, numbered by their offsets in the geometry section (ties,
+// which only empty levels make, in object and level order), and back.
 class PieceTable {
  public:
   explicit PieceTable(const World& world);
-  PieceId piece(ObjectId id, uint32_t level) const { return first_[id] + level; }
-  ObjectId object(PieceId p) const { return owner_[p]; }
-  uint32_t level(PieceId p) const { return p - first_[owner_[p]]; }
-  uint64_t count() const { return owner_.size(); }
+  // Numbered as if the levels lay at `offsets`: one per level, each object's levels in turn
+  // (object 0 level 0, object 0 level 1, ...). REQUIRES offsets.size() == the world's level count.
+  PieceTable(const World& world, std::span<const uint64_t> offsets);
+  PieceId piece(ObjectId id, uint32_t level) const { return piece_[first_[id] + level]; }
+  ObjectId object(PieceId p) const { return object_[p]; }
+  uint32_t level(PieceId p) const { return level_[p]; }
+  uint64_t count() const { return object_.size(); }
+  uint64_t resident_bytes() const;
 
  private:
-  std::vector<uint32_t> first_;
-  std::vector<ObjectId> owner_;
+  std::vector<uint32_t> first_;    // per object: the index of its level 0 among every level
+  std::vector<PieceId> piece_;     // per level, in object and level order
+  std::vector<ObjectId> object_;   // per piece
+  std::vector<uint32_t> level_;    // per piece
 };
 
 // A cell's vLOD as pieces, ascending: each object of its set at the level `rule` draws there.
@@ -72,13 +81,6 @@ struct PieceOrders {
   std::vector<uint32_t> file, morton, tsp;
 };
 
-// Encodes the section, its own partition included, from a vlod engine's sets. Key cells: in id
-// order, a cell with a vLOD and no key cell within `key_spacing` face steps becomes one. With
-// `orders`, returns the orders it measured R(M) in.
-std::vector<uint8_t> encode_vlod_section(const World& world, const ViewCellPartition& partition, const CellSets& sets,
-                                         const CellLodRule& rule, VlodSizes& sizes, int key_spacing = 3,
-                                         PieceOrders* orders = nullptr);
-
 // §3 applied: the order the world's encoded levels are laid out in on disk, so the pieces each
 // crossing adds lie in few contiguous runs. kKeep leaves the geometry as it is; kMorton lays
 // it out along the Morton curve of the objects' centres (the baseline); kTsp in the
@@ -92,10 +94,13 @@ DiskLayout parse_disk_layout(const std::string& name);
 
 // Writes `out`: `world` with its vlod section replaced by the one of these sets, every other
 // section (the cells, pvs and dov of another run too) kept, so one world serves vlod beside the
-// strategies that read DoVs, and its geometry laid out as `layout` says. Atomic. REQUIRES: every
-// computed cell has a set.
+// strategies that read DoVs, and its geometry laid out as `layout` says, the section's pieces
+// numbered in that layout. Key cells: in id order, a cell with a vLOD and no key cell within
+// `key_spacing` face steps becomes one. With `orders`, returns the orders R(M) was measured in
+// (pieces numbered as in `world`). Atomic. REQUIRES: every computed cell has a set.
 VlodSizes write_world_with_vlod(const World& world, const std::string& out, const ViewCellPartition& partition,
-                                const CellSets& sets, const CellLodRule& rule, DiskLayout layout = DiskLayout::kTsp);
+                                const CellSets& sets, const CellLodRule& rule, DiskLayout layout = DiskLayout::kTsp,
+                                int key_spacing = 3, PieceOrders* orders = nullptr);
 
 // Reads the section's index (its cells; per cell: key frame and the Δ records of its faces) and reads each
 // record from the file when asked. Thread-safety: const methods may be called concurrently.
