@@ -66,6 +66,11 @@ TEST(VlodBench, WritesReportWithSaneFigures) {
   }
   ASSERT_EQ(s["scale"].size(), 2u);
   EXPECT_EQ(s["scale"][0]["vlod_over_smallest"], 1.0);
+  // The city of the scale table not walked above has its Δ storage in the report too.
+  ASSERT_EQ(s["scale_storage"].size(), 1u);
+  EXPECT_LE(s["scale_storage"][0]["vlod"][0]["delta_bytes"].get<uint64_t>(),
+            s["scale_storage"][0]["vlod"][0]["bitmask_bytes"].get<uint64_t>());
+  EXPECT_EQ(md.find("Still running"), std::string::npos);
 }
 
 // A strategy the budget cannot hold is a row saying so, and the bench goes on.
@@ -74,7 +79,7 @@ TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
   VlodBenchParams p;
   p.city_objects = 60;
   p.plant_units = 1;
-  p.scale_objects = {};
+  p.scale_objects = {60};
   p.path_kinds = {"normal"};
   p.pixel_errors = {1.0};
   p.frames = 12;
@@ -92,6 +97,38 @@ TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
     for (const auto& r : w["walks"]["normal"]) refused += r.contains("refused") ? 1 : 0;
   EXPECT_GT(refused, 0u);
   EXPECT_NE(slurp(std::filesystem::path(p.out_dir) / "vlod.md").find("refused: "), std::string::npos);
+  // The scale table's runs under the same budget: figures or the reason, never an abort.
+  ASSERT_EQ(s["scale"].size(), 1u);
+  EXPECT_TRUE(s["scale"][0].contains("refused") || s["scale"][0].contains("vlod_ms")) << s["scale"][0].dump();
+}
+
+// With a budget nothing fits in, every run of every table is a refusal row, and the report
+// is written whole.
+TEST(VlodBench, NothingFitsAndTheReportStillComesOut) {
+  const test::TempDir dir;
+  VlodBenchParams p;
+  p.city_objects = 60;
+  p.plant_units = 1;
+  p.scale_objects = {60};
+  p.path_kinds = {"normal"};
+  p.pixel_errors = {1.0};
+  p.frames = 6;
+  p.width = 64;
+  p.height = 48;
+  p.fidelity_every = 6;
+  p.tightness_cells = 1;
+  p.budget_fraction = 0.0;
+  p.min_budget_mib = 0.01;  // 10 KiB: not even a world's directory
+  p.out_dir = dir.file("results");
+  p.work_dir = dir.file("work");
+  const nlohmann::ordered_json s = run_vlod_bench(p);
+  for (const auto& w : s["worlds"])
+    for (const auto& r : w["walks"]["normal"]) EXPECT_TRUE(r.contains("refused")) << r.dump();
+  ASSERT_EQ(s["scale"].size(), 1u);
+  EXPECT_TRUE(s["scale"][0].contains("refused")) << s["scale"][0].dump();
+  const std::string md = slurp(std::filesystem::path(p.out_dir) / "vlod.md");
+  EXPECT_NE(md.find("## Precompute"), std::string::npos);
+  EXPECT_EQ(md.find("Still running"), std::string::npos);
 }
 
 // Table 1 at small sizes: every run is in the report, beside the seed's row where the seed has

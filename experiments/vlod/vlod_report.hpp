@@ -7,7 +7,8 @@
 //             which is brute), triangles per pixel, stalls, peak resident bytes; then every
 //             k-th frame of each against ground truth (missed objects, pixel error, differing
 //             pixels), all against one truth rendering per frame;
-//   storage   the Δs of every world in each codec against bitmasks and 32-bit id lists, their
+//   storage   the Δs of every world (the scale table's cities too) in each codec against
+//             bitmasks and 32-bit id lists, their
 //             decode time, R(M) in the world's order and the Hamming-TSP order (§3), Δs
 //             against the world file;
 //   coherence frames that change cell, |Δ| / |vLOD| at each change (Fig. 10), section bytes
@@ -17,7 +18,9 @@
 //   tightness vLOD's sets against 125-point sampling (8 corners, 6 face centres, the centre
 //             and 110 random points) on a few cells (seed: 2–10×);
 //   precompute seconds per cell.
-// Writes <out>/vlod.md and <out>/vlod/{walks,storage,coherence,scale,tightness}.csv, triangles.svg.
+// Writes <out>/vlod.md and <out>/vlod/{walks,storage,coherence,scale,tightness}.csv, triangles.svg,
+// once the walked worlds are measured and again at the end. A run the budget cannot hold is a
+// row saying why, in every table.
 #pragma once
 
 #include <cstdint>
