@@ -38,9 +38,11 @@ struct LodLevel {
   size_t triangle_count = 0;
   // Object-space error in the mesh's units: how far the level's surface lies from the
   // original's, measured both ways against the ORIGINAL mesh. The largest of
-  //  - the distance from each sampled original vertex (see error_samples) to the nearest
-  //    triangle of this level,
-  //  - the distance from each vertex and triangle centroid of this level to the nearest
+  //  - the distance from each sampled original vertex (see error_samples) and each point of
+  //    a grid on the original's triangles (spacing 1/64 of its diagonal; a triangle's
+  //    centroid when it is smaller; at most error_samples points) to the nearest triangle of
+  //    this level,
+  //  - the distance from each vertex and grid point of this level's triangles to the nearest
   //    original triangle,
   //  - meshopt's own estimate for the step from the previous level, and the previous
   //    level's error (so errors never decrease along the chain).
