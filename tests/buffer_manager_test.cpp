@@ -97,6 +97,27 @@ struct LruOracle {
   }
 };
 
+// Bytes a caller charges beside the cache (vLOD's resident set): cached items that nobody holds
+// make room, least recently used first; a held item stays; more than the budget is refused.
+TEST(BufferManager, ReserveEvictsWhatNobodyHolds) {
+  MemoryBudget budget(3000);
+  BufferManager cache(budget, make_lru_policy());
+  for (CacheKey key = 0; key < 20 && budget.used() + size_of(key) <= 3000; ++key) cache.get(key, {}, loader_for(key));
+  const uint64_t cached = budget.used();
+  ASSERT_GT(cached, 2000u);
+  const CacheResult held = cache.get(1, {}, loader_for(1));  // the most recent: kept
+  EXPECT_FALSE(budget.try_reserve(1500));                     // a plain reserve fails
+  EXPECT_TRUE(cache.reserve(1500));
+  EXPECT_LE(budget.used(), 3000u);
+  EXPECT_GE(budget.used(), 1500u + size_of(1));
+  EXPECT_TRUE(cache.contains(1));
+  EXPECT_FALSE(cache.contains(0));  // the least recently used went first
+  EXPECT_FALSE(cache.reserve(3000 - 1500 - size_of(1) + 1));  // the held item cannot go
+  budget.release(1500);
+  EXPECT_FALSE(cache.reserve(3001));
+  EXPECT_LE(budget.peak(), 3000u);
+}
+
 TEST(BufferManager, LruCountsMatchOracleAndBudgetHolds) {
   for (uint64_t limit : {900u, 3000u, 12000u}) {
     MemoryBudget budget(limit);

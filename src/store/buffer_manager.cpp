@@ -121,6 +121,23 @@ bool BufferManager::resident_or_loading(CacheKey key) const {
   return items_.contains(key) || loading_.contains(key);
 }
 
+bool BufferManager::reserve(uint64_t bytes) {
+  std::lock_guard lock(mutex_);
+  if (!budget_.could_fit(bytes)) return false;
+  if (budget_.limit() != 0) {  // refuse before evicting anything when even eviction cannot make room
+    uint64_t freeable = 0;
+    for (const auto& [key, item] : items_)
+      if (item.pins == 0 && item.value.use_count() == 1) freeable += item.bytes;
+    if (budget_.used() - std::min(budget_.used(), freeable) + bytes > budget_.limit()) return false;
+  }
+  while (!budget_.try_reserve(bytes)) {
+    const std::optional<CacheKey> victim = evictable_victim();
+    if (!victim) return false;
+    evict(*victim);
+  }
+  return true;
+}
+
 bool BufferManager::erase(CacheKey key) {
   std::lock_guard lock(mutex_);
   auto it = items_.find(key);

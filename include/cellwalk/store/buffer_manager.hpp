@@ -81,6 +81,10 @@ class BufferManager {
   bool contains(CacheKey key) const;
   // Whether `key` is resident or being loaded by some caller.
   bool resident_or_loading(CacheKey key) const;
+  // Reserves `bytes` in the budget for the caller (data it holds beside the cache), evicting
+  // items nobody holds as the policy chooses until they fit. Returns false, evicting nothing,
+  // when they cannot fit even so. The caller releases them with budget().release(bytes).
+  bool reserve(uint64_t bytes);
   // Removes `key`. Returns false if it is not resident, or pinned or held by a caller (kept).
   bool erase(CacheKey key);
   // A pinned item is never evicted (e.g. the R-tree root). REQUIRES: key is resident.

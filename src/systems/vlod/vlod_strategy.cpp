@@ -101,10 +101,9 @@ struct VlodStrategy::Impl {
 
   // Charges `bytes` more (or fewer) to the hard budget, evicting cached geometry if it must.
   void recharge(uint64_t& held, uint64_t bytes) {
-    MemoryBudget& budget = store.buffer().budget();
-    budget.release(held);
+    store.buffer().budget().release(held);
     held = 0;
-    if (!budget.try_reserve(bytes))
+    if (!store.buffer().reserve(bytes))
       fail("vlod", "memory budget of " + byte_size_text(options.memory_budget_bytes) + " cannot hold the vLOD of cell " +
                        std::to_string(cell ? *cell : 0) + " (" + byte_size_text(bytes) + "); give a larger --budget");
     held = bytes;
