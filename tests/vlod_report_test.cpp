@@ -73,24 +73,31 @@ TEST(VlodBench, WritesReportWithSaneFigures) {
   EXPECT_EQ(md.find("Still running"), std::string::npos);
 }
 
-// A strategy the budget cannot hold is a row saying so, and the bench goes on.
-TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
-  const test::TempDir dir;
+// The smallest bench the budget tests need: one city, one plant, one scale city, one path,
+// one bound; the caller sets the budget.
+VlodBenchParams budget_params(const test::TempDir& dir, int frames, int width, int height) {
   VlodBenchParams p;
   p.city_objects = 60;
   p.plant_units = 1;
   p.scale_objects = {60};
   p.path_kinds = {"normal"};
   p.pixel_errors = {1.0};
-  p.frames = 12;
-  p.width = 96;
-  p.height = 72;
+  p.frames = frames;
+  p.width = width;
+  p.height = height;
   p.fidelity_every = 6;
   p.tightness_cells = 1;
-  p.budget_fraction = 0.001;
-  p.min_budget_mib = 1;  // REVIEW's R-tree alone needs more
   p.out_dir = dir.file("results");
   p.work_dir = dir.file("work");
+  return p;
+}
+
+// A strategy the budget cannot hold is a row saying so, and the bench goes on.
+TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
+  const test::TempDir dir;
+  VlodBenchParams p = budget_params(dir, 12, 96, 72);
+  p.budget_fraction = 0.001;
+  p.min_budget_mib = 1;  // REVIEW's R-tree alone needs more
   const nlohmann::ordered_json s = run_vlod_bench(p);
   uint64_t refused = 0;
   for (const auto& w : s["worlds"])
@@ -106,21 +113,9 @@ TEST(VlodBench, ARefusedBudgetIsARowNotAnAbort) {
 // is written whole.
 TEST(VlodBench, NothingFitsAndTheReportStillComesOut) {
   const test::TempDir dir;
-  VlodBenchParams p;
-  p.city_objects = 60;
-  p.plant_units = 1;
-  p.scale_objects = {60};
-  p.path_kinds = {"normal"};
-  p.pixel_errors = {1.0};
-  p.frames = 6;
-  p.width = 64;
-  p.height = 48;
-  p.fidelity_every = 6;
-  p.tightness_cells = 1;
+  VlodBenchParams p = budget_params(dir, 6, 64, 48);
   p.budget_fraction = 0.0;
   p.min_budget_mib = 0.01;  // 10 KiB: not even a world's directory
-  p.out_dir = dir.file("results");
-  p.work_dir = dir.file("work");
   const nlohmann::ordered_json s = run_vlod_bench(p);
   for (const auto& w : s["worlds"])
     for (const auto& r : w["walks"]["normal"]) EXPECT_TRUE(r.contains("refused")) << r.dump();
