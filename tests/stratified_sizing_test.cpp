@@ -1,0 +1,179 @@
+// Stratified sizing (seed 002 §2.2–§2.4, §4; digest 002 §3.3–§3.11): the thesis's figures and
+// the digest's reproductions are the oracle, and the numerical checker is checked against the
+// closed forms it must agree with.
+#include <cmath>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/systems/stratified/sizing.hpp"
+
+namespace cellwalk::stratified {
+namespace {
+
+double rad(double degrees) { return degrees * std::numbers::pi / 180.0; }
+double deg(double radians) { return radians * 180.0 / std::numbers::pi; }
+
+TEST(StratifiedSizing, Eq21IsTheAngleBetweenTheTwoSightLines) {
+  // V' at (s, 0), Q at (0, t), P at (0, t + t'): the angle between the two directions.
+  const double s = 3, t = 4, tp = 10;
+  const double expected = std::atan2(t + tp, s) - std::atan2(t, s);
+  EXPECT_NEAR(parallax_angle(s, t, tp), expected, 1e-12);
+  EXPECT_NEAR(parallax_angle(s, t, 0), 0.0, 1e-12);
+}
+
+TEST(StratifiedSizing, Eq22ReproducesTheThesisViewcells) {
+  // §2.4.1 and Table 6.1 (digest §3.3): 6.35, 6.22, 33 and 5 m, to the digest's 4 figures.
+  EXPECT_NEAR(eq22_viewcell_side(rad(10), 56, 1000), 6.354, 0.001);
+  EXPECT_NEAR(eq22_viewcell_side(rad(10), 56, 10000), 6.222, 0.001);
+  EXPECT_NEAR(eq22_viewcell_side(rad(7.5), 330, 1000), 32.81, 0.01);
+  EXPECT_NEAR(eq22_viewcell_side(rad(1), 330, 1000), 4.80, 0.005);
+  // The side it returns has the angle it was asked for.
+  const double v = eq22_viewcell_side(rad(7.5), 330, 1000);
+  EXPECT_NEAR(deg(eq22_angle(v, 330, 1000)), 7.5, 1e-6);
+}
+
+TEST(StratifiedSizing, Eq22ReproducesTheFigureCurves) {
+  // Figs. 2-5 to 2-9 as the digest computed them from Eq. 2.2.
+  struct Row { double alpha, b, l, v; };
+  const Row rows[] = {{0.1, 1000, 3000, 1.48}, {1, 1000, 3000, 14.6},  {5, 1000, 3000, 68.6},
+                      {20, 1000, 3000, 234.6}, {45, 1000, 3000, 481.4}, {10, 10, 3000, 1.11},
+                      {10, 300, 3000, 34.7},   {10, 2000, 3000, 313.2}, {10, 1000, 1100, 190.8},
+                      {10, 1000, 1e5, 111.3},  {1, 56, 1000, 0.70},     {20, 56, 10000, 11.49}};
+  for (const Row& r : rows)
+    EXPECT_NEAR(eq22_viewcell_side(rad(r.alpha), r.b, r.l), r.v, r.v * 0.005 + 0.005)
+        << r.alpha << "° b " << r.b << " l " << r.l;
+}
+
+TEST(StratifiedSizing, Eq22TakesTheRisingBranchWhenTheAnglePeaks) {
+  // l = 1100, b = 1000: the angle peaks inside (0, b) and is only 8.05° at v = b, yet 10° is
+  // reached at v = 190.8 (Fig. 2-7); the peak is 24.7° near v = 558, and more is refused.
+  EXPECT_LT(eq22_angle(999.9, 1000, 1100), rad(8.1));
+  const double v = eq22_viewcell_side(rad(10), 1000, 1100);
+  EXPECT_NEAR(v, 190.8, 0.1);
+  for (double w = v / 16; w < v; w += v / 16) EXPECT_LT(eq22_angle(w, 1000, 1100), rad(10));
+  EXPECT_NEAR(eq22_viewcell_side(rad(24.6), 1000, 1100), 520, 40);
+  EXPECT_THROW(eq22_viewcell_side(rad(24.8), 1000, 1100), Error);
+}
+
+TEST(StratifiedSizing, AnAngleTheModelCannotReachIsRefused) {
+  // α has an upper bound (§2.4.1); for l ≫ b the angle rises all the way to v = b, where it is
+  // atan(√2 (l − b)/b).
+  const double top = std::atan(std::sqrt(2.0) * (1000 - 56) / 56);
+  EXPECT_NO_THROW(eq22_viewcell_side(top * 0.999, 56, 1000));
+  EXPECT_THROW(eq22_viewcell_side(top * 1.001, 56, 1000), Error);
+  EXPECT_THROW(eq22_viewcell_side(rad(10), 1000, 56), Error);
+  EXPECT_THROW(eq22_viewcell_side(NAN, 56, 1000), Error);
+  EXPECT_THROW(eq22_viewcell_side(rad(10), -1, 1000), Error);
+}
+
+TEST(StratifiedSizing, StrictBoundIsTheDigestsClosedForm) {
+  EXPECT_NEAR(strict_viewcell_side(rad(10), 56), 5.10, 0.005);
+  EXPECT_NEAR(strict_viewcell_side(rad(7.5), 330), 23.1, 0.05);
+  EXPECT_NEAR(strict_viewcell_side(rad(1), 330), 3.29, 0.005);
+}
+
+TEST(StratifiedSizing, CheckerFindsTheObliqueWorstCaseAboveEq22) {
+  // Digest §3.3: at Eq. 2.2's v the true worst angle exceeds α by 4–10 % (cubic model:
+  // 10.53°, 7.91°, 1.10°; flat: 10.40° at 10 m high, 7.86° at 67 m).
+  struct Row { double alpha, b, height, worst; };
+  const Row rows[] = {{10, 56, 1000, 10.53}, {7.5, 330, 1000, 7.91}, {1, 330, 1000, 1.10},
+                      {10, 56, 10, 10.40},   {7.5, 330, 67, 7.86},   {1, 330, 67, 1.09}};
+  for (const Row& r : rows) {
+    const double v = eq22_viewcell_side(rad(r.alpha), r.b, 1000);
+    const WorstCase w = worst_case_angle(v, r.b, {1000, r.height});
+    EXPECT_NEAR(deg(w.angle), r.worst, 0.01) << r.alpha << "° height " << r.height;
+    // Oblique: not along an axis.
+    const double axis = std::max({std::abs(w.direction[0]), std::abs(w.direction[1]), std::abs(w.direction[2])});
+    EXPECT_LT(axis, std::cos(rad(5)));
+  }
+}
+
+TEST(StratifiedSizing, CheckerNeverExceedsAlphaAtTheStrictSide) {
+  for (const double alpha : {1.0, 7.5, 10.0, 20.0})
+    for (const double b : {56.0, 330.0}) {
+      const double v = strict_viewcell_side(rad(alpha), b);
+      EXPECT_LE(worst_case_angle(v, b, {1000, 1000}).angle, rad(alpha)) << alpha << "° b " << b;
+    }
+}
+
+TEST(StratifiedSizing, NumericalSizingIsTheLargestSideTheCheckerAccepts) {
+  const ModelExtent model{1000, 67};
+  const double v = viewcell_side(Sizing::kNumerical, rad(7.5), 330, model);
+  EXPECT_GT(v, strict_viewcell_side(rad(7.5), 330));
+  EXPECT_LT(v, eq22_viewcell_side(rad(7.5), 330, 1000));
+  EXPECT_LE(worst_case_angle(v, 330, model).angle, rad(7.5));
+  EXPECT_GT(worst_case_angle(v * 1.01, 330, model).angle, rad(7.5));
+}
+
+TEST(StratifiedSizing, Eq23GivesTheThesisBox) {
+  // §2.4.2: 1.8M triangles/s at 60 Hz = 30,000 polygons a frame; 1/m³ and the 1/6 frustum rule
+  // give b³ = 180,000 m³, b ≈ 56 m; 197k textured pixels are under the 920k fill allows.
+  const BoxSizing s = box_side_from_budget({});
+  EXPECT_DOUBLE_EQ(s.polygons_per_frame, 30000);
+  EXPECT_NEAR(s.fill_per_frame, 916667, 1);
+  EXPECT_NEAR(s.textured_pixels, 196608, 1);
+  EXPECT_NEAR(s.b, 56.46, 0.01);
+  HardwareBudget fill_bound;
+  fill_bound.textured_fill_per_second = 10e6;
+  EXPECT_THROW(box_side_from_budget(fill_bound), Error);
+}
+
+TEST(StratifiedSizing, CellCountsOfTheCampusAndTheCity) {
+  // §2.4.3: the campus, 1 km × 1 km × 10 m at v = 6.35 → 158²·2 = 49,928 ≈ 50,000; the city,
+  // 10 km × 10 km × 100 m at 6.22 m → 4.1×10^7 by volume.
+  EXPECT_EQ(count_viewcells(6.35, 1000, 1000, 10).grid, 49928u);
+  EXPECT_NEAR(count_viewcells(6.22, 1e4, 1e4, 100).volume_ratio, 4.16e7, 0.01e7);
+  EXPECT_EQ(count_viewcells(10, 1000, 1000, 10).grid, 10000u);  // an exact fit adds no row
+}
+
+TEST(StratifiedSizing, MultiShellReproducesTables41And42) {
+  const ModelExtent campus{1000, 10};
+  // The printed f = 1.72 is rounded: 1.7225 gives the printed boxes and cells (digest §3.11).
+  const ShellPlan linear = multi_shell(rad(10), 56, 1.7225, ShellSpacing::kLinear, campus);
+  EXPECT_EQ(linear.cells, 15230u);
+  const uint64_t linear_cells[] = {10000, 3481, 1156, 400, 144, 49};  // Table 4.1 + the 7² level
+  const double linear_v[] = {10.0, 17.2, 29.6, 51.1, 88.0};
+  ASSERT_EQ(linear.shells.size(), 6u);
+  for (size_t i = 0; i < 6; ++i) EXPECT_EQ(linear.shells[i].cells, linear_cells[i]) << i;
+  for (size_t i = 0; i < 5; ++i) EXPECT_NEAR(linear.shells[i].v, linear_v[i], 0.1) << i;
+  const double linear_b[] = {56.0, 96.4, 166.2, 286.3, 493.3};
+  for (size_t i = 0; i < 5; ++i) EXPECT_NEAR(linear.shells[i].b, linear_b[i], 0.5) << i;
+  EXPECT_EQ(multi_shell(rad(10), 56, 1.72, ShellSpacing::kLinear, campus).cells, 15230u);
+
+  const ShellPlan exponential = multi_shell(rad(10), 56, 1.1365, ShellSpacing::kExponential, campus);
+  EXPECT_EQ(exponential.cells, 15129u);
+  const uint64_t exp_cells[] = {10000, 3600, 1156, 324, 49};  // Table 4.2 + the 7² level
+  ASSERT_EQ(exponential.shells.size(), 5u);
+  for (size_t i = 0; i < 5; ++i) EXPECT_EQ(exponential.shells[i].cells, exp_cells[i]) << i;
+  // Each level's v solves Eq. 4.1 with its own l_i.
+  for (const Shell& s : linear.shells) EXPECT_NEAR(deg(eq22_angle(s.v, s.b, s.l)), 10.0, 1e-6);
+}
+
+TEST(StratifiedSizing, ShellSearchFindsAtMostTheThesisCount) {
+  // Just above f = 1.72 v_0 drops below 10 m and the count jumps (two vertical layers).
+  const ModelExtent campus{1000, 10};
+  EXPECT_GT(multi_shell(rad(10), 56, 1.73, ShellSpacing::kLinear, campus).cells, 25000u);
+  const ShellSearch best = best_shell_spacing(rad(10), 56, ShellSpacing::kLinear, campus, 1.05, 3.0, 0.005);
+  EXPECT_LE(best.plan.cells, 15230u);
+  EXPECT_LT(best.plan.cells, count_viewcells(eq22_viewcell_side(rad(10), 56, 1000), 1000, 1000, 10).grid / 3);
+  EXPECT_THROW(multi_shell(rad(10), 56, 1.0, ShellSpacing::kLinear, campus), Error);
+}
+
+TEST(StratifiedSizing, Eq45CorrectedScalesWithCrossingsNotVolume) {
+  ShellPlan plan;
+  plan.shells = {{10, 56, 0, 0}, {20, 100, 0, 0}};
+  const ShellCosts c = shell_costs(plan, 1e7, 4, 512 * 512, 4, 1.0);
+  const double per_cell = 4.0 * 512 * 512 * 4;
+  EXPECT_NEAR(c.texture_bytes, 1e7 * per_cell * (1 / 1000.0 + 1 / 8000.0), 1);
+  EXPECT_NEAR(c.update_bytes_per_s, per_cell * (1 / 10.0 + 1 / 20.0), 1e-6);
+  EXPECT_NEAR(c.update_as_printed, per_cell * (1 / 1000.0 + 1 / 8000.0), 1e-6);
+  // Table 3.2 and Eq. 3.1's campus: 0.2 and 5.6 crossings a second; ~126 h.
+  EXPECT_NEAR(crossings_per_second(1.0, 5), 0.2, 1e-12);
+  EXPECT_NEAR(crossings_per_second(100 / 3.6, 5), 5.56, 0.01);
+  EXPECT_NEAR(preprocessing_seconds(1e7, 81600, 1.8e6) / 3600, 126, 0.5);
+}
+
+}  // namespace
+}  // namespace cellwalk::stratified
