@@ -177,3 +177,50 @@ TEST(StratifiedSizing, Eq45CorrectedScalesWithCrossingsNotVolume) {
 
 }  // namespace
 }  // namespace cellwalk::stratified
+
+// ---- cellwalk stratify plan ------------------------------------------------------------------
+
+#include <nlohmann/json.hpp>
+
+#include "test_support.hpp"
+
+namespace cellwalk::stratified {
+namespace {
+
+TEST(StratifyPlan, ReportsTheThesisCampusInJson) {
+  const test::CommandResult r =
+      test::run_cellwalk("stratify plan --alpha 10 --box 56 --model-length 1000 --model-height 10 "
+                         "--shell-factor 1.7225 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_NEAR(j["sizings"][0]["v"].get<double>(), 6.354, 0.001);
+  EXPECT_EQ(j["sizings"][0]["sizing"], "eq22");
+  EXPECT_EQ(j["multi_shell"]["cells"].get<uint64_t>(), 15230u);
+  // The checker's worst angle: above α for Eq. 2.2, at most α for the strict and numerical sides.
+  EXPECT_GT(j["sizings"][0]["worst_angle_deg"].get<double>(), 10.3);
+  EXPECT_LE(j["sizings"][1]["worst_angle_deg"].get<double>(), 10.0);
+  EXPECT_LE(j["sizings"][2]["worst_angle_deg"].get<double>(), 10.0 + 1e-9);
+}
+
+TEST(StratifyPlan, SizesForAWorldFromItsExtentAndDensity) {
+  const test::CommandResult r = test::run_cellwalk(
+      "stratify plan " + test::source_path("tests/data/seeds/cube.cww") + " --box 0.5 --shells none --no-check --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = nlohmann::json::parse(r.output);
+  EXPECT_FALSE(j["model"]["world"].is_null());
+  EXPECT_GT(j["model"]["x"].get<double>(), 0.5);
+  EXPECT_TRUE(j["sizings"][0]["worst_angle_deg"].is_null());
+}
+
+TEST(StratifyPlan, BadArgumentsGetOneLineAndAFailure) {
+  for (const char* args : {"stratify plan --alpha 95", "stratify plan --alpha nan", "stratify plan --box 2000",
+                           "stratify plan --alpha 88 --box 56 --shells none", "stratify plan --fill-per-second 1000",
+                           "stratify plan --shell-factor 1", "stratify plan no-such.cww"}) {
+    const test::CommandResult r = test::run_cellwalk(args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+  }
+}
+
+}  // namespace
+}  // namespace cellwalk::stratified

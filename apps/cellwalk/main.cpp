@@ -44,6 +44,7 @@ int main(int argc, char** argv) {
   cellwalk::app::register_verify(root);
   cellwalk::app::register_pvs(root);
   cellwalk::app::register_visual_build(root);
+  cellwalk::app::register_stratify(root);
   cellwalk::app::register_path(root);
   cellwalk::app::register_walk(root);
   cellwalk::app::register_compare(root);

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -21,7 +22,13 @@ void require_positive(double x, const char* what) {
   if (!(std::isfinite(x) && x > 0)) fail("stratify plan", std::string(what) + " must be finite and positive");
 }
 
-std::string degrees(double radians) { return std::to_string(radians * 180.0 / std::numbers::pi) + "°"; }
+std::string number(double x) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", x);
+  return text;
+}
+
+std::string degrees(double radians) { return number(radians * 180.0 / std::numbers::pi) + "°"; }
 
 // Eq. 2.2 written with the distance left beyond the cell, `rest` = l − v (Eq. 4.1 has l_i − v_i
 // constant while v_i varies).
@@ -64,7 +71,7 @@ double bisect_side(double alpha, double b, Rest rest, const std::string& where) 
   const double v = rising_side(alpha, b, rest);
   if (std::isnan(v))
     fail(where, "α = " + degrees(alpha) + " is above the largest angle Eq. 2.2 gives for a box of " +
-                    std::to_string(b) + " m in this model; choose a smaller α or a larger model");
+                    number(b) + " m in this model; choose a smaller α or a larger model");
   return v;
 }
 
@@ -198,8 +205,8 @@ BoxSizing box_side_from_budget(const HardwareBudget& h) {
   s.fill_per_frame = h.textured_fill_per_second / h.frame_rate;
   s.textured_pixels = h.viewport_pixels * h.textured_fraction;
   if (!(s.textured_pixels < s.fill_per_frame))
-    fail("stratify plan (Eq. 2.3)", "fill is the bottleneck: " + std::to_string(s.textured_pixels) +
-                                        " textured pixels a frame against " + std::to_string(s.fill_per_frame) +
+    fail("stratify plan (Eq. 2.3)", "fill is the bottleneck: " + number(s.textured_pixels) +
+                                        " textured pixels a frame against " + number(s.fill_per_frame) +
                                         " the fill rate allows; lower the frame rate or the viewport");
   s.b = std::cbrt(s.polygons_per_frame / (h.density * h.frustum_fraction));
   return s;
@@ -259,7 +266,7 @@ ShellPlan multi_shell(double alpha, double b0, double f, ShellSpacing spacing, c
   if (!(f > 1.0) || !std::isfinite(f)) fail("stratify plan", "the shell factor f must be greater than 1");
   std::optional<ShellPlan> plan = try_multi_shell(alpha, b0, f, spacing, model);
   if (!plan)
-    fail("stratify plan (Eq. 4.1)", "with f = " + std::to_string(f) +
+    fail("stratify plan (Eq. 4.1)", "with f = " + number(f) +
                                         " some shell's box is too small for α at the distance of the next; "
                                         "choose a smaller f or a larger α");
   return *plan;
