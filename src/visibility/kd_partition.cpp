@@ -25,16 +25,9 @@ float split_at(const Aabb& box, int a, float origin, float v) {
 void split(visibility::BoxNode& node, const Vec3& origin, float v, bool two_d, const SolidTest& solid) {
   node.solid = solid && solid(node.box);
   if (node.solid) return;
-  int axis = -1;
-  for (int a = 0; a < 3; ++a) {
-    if (two_d && a == 1) continue;
-    if (std::isnan(split_at(node.box, a, origin[a], v))) continue;
-    if (axis < 0 || node.box.size()[a] > node.box.size()[axis]) axis = a;
-  }
-  if (axis < 0) return;
-  Vec3 at = node.box.center();
-  at[axis] = split_at(node.box, axis, origin[axis], v);
-  for (const Aabb& box : visibility::split_box(node.box, axis == 0, axis == 1, axis == 2, at)) {
+  const std::optional<std::array<Aabb, 2>> halves = kd_split(node.box, origin, v, two_d);
+  if (!halves) return;
+  for (const Aabb& box : *halves) {
     visibility::BoxNode child;
     child.box = box;
     child.depth = node.depth + 1;
@@ -44,6 +37,19 @@ void split(visibility::BoxNode& node, const Vec3& origin, float v, bool two_d, c
 }
 
 }  // namespace
+
+std::optional<std::array<Aabb, 2>> kd_split(const Aabb& box, const Vec3& origin, float v, bool two_d) {
+  int axis = -1;
+  for (int a = 0; a < 3; ++a) {
+    if (two_d && a == 1) continue;
+    if (std::isnan(split_at(box, a, origin[a], v))) continue;
+    if (axis < 0 || box.size()[a] > box.size()[axis]) axis = a;
+  }
+  if (axis < 0) return std::nullopt;
+  std::array<Aabb, 2> halves{box, box};
+  halves[0].max[axis] = halves[1].min[axis] = split_at(box, axis, origin[axis], v);
+  return halves;
+}
 
 std::unique_ptr<ViewCellPartition> make_kd_partition(const CellRegion& region, float viewcell_size,
                                                      const SolidTest& solid) {

@@ -2,6 +2,7 @@
 // precomputed visible set holds (HDoV thesis §5.2, vLOD §2.1/§6, stratified thesis ch. 3).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -99,6 +100,10 @@ std::unique_ptr<ViewCellPartition> make_octree_partition(const CellRegion& regio
 // middle, while the cell is longer than viewcell_size along some axis. Leaves are the cells.
 std::unique_ptr<ViewCellPartition> make_kd_partition(const CellRegion& region, float viewcell_size,
                                                      const SolidTest& solid = {});
+// One split of that tree: the two halves of `box` (lower first), or nullopt when `box` is a
+// leaf. `origin` is the region's minimum corner. Lets a builder walk the tree make_kd_partition
+// makes (the stratified near lists, built depth first) without holding it.
+std::optional<std::array<Aabb, 2>> kd_split(const Aabb& box, const Vec3& origin, float viewcell_size, bool two_d);
 
 // A copy of `partition` in which every non-solid cell that `keep` rejects is marked skipped
 // (ids, boxes and neighbours unchanged). Throws Error for a partition cellwalk did not make.
