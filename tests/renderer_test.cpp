@@ -475,6 +475,96 @@ uint32_t big_endian(const std::string& bytes, size_t offset) {
          uint32_t(uint8_t(bytes[offset + 2])) << 8 | uint8_t(bytes[offset + 3]);
 }
 
+// A 4×4 far-face image: left half red, right half blue, its top row empty (alpha 0).
+Image far_image() {
+  Image image{4, 4, std::vector<uint8_t>(64, 0)};
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) {
+      uint8_t* p = &image.rgba[(size_t(y) * 4 + x) * 4];
+      p[x < 2 ? 0 : 2] = 255;
+      p[3] = 255;
+    }
+  return image;
+}
+
+// The quad z = -5, x in [-4, 4], y in [-3, 3], in front of test_camera().
+FarFace far_face(uint32_t id, const Image& image, const IdImage* ids = nullptr) {
+  return {id, Vec3(-4.0f, -3.0f, -5.0f), Vec3(8.0f, 0.0f, 0.0f), Vec3(0.0f, 6.0f, 0.0f), &image, ids};
+}
+
+// Where the world point p lands in the image (pixel column, row from the bottom).
+std::pair<int, int> pixel_of(const Vec3& p) {
+  const Vec4 clip = test_camera().view_projection() * Vec4(p, 1.0f);
+  return {int((clip.x / clip.w * 0.5f + 0.5f) * kWidth), int((clip.y / clip.w * 0.5f + 0.5f) * kHeight)};
+}
+
+TEST_F(RendererTest, FarFaceShowsItsImageAndLetsEmptyTexelsThrough) {
+  Renderer renderer(settings());
+  const Image image = far_image();
+  const std::vector<FarFace> faces{far_face(3, image)};
+  Meshes meshes;
+  const RenderStats stats = renderer.render(test_camera(), {}, meshes.provider(), faces);
+  EXPECT_EQ(stats.uploaded_bytes, 64u);
+  const Image color = renderer.read_color();
+  const IdImage ids = renderer.read_ids();
+  auto rgba = [&](const Vec3& p) {
+    const auto [x, y] = pixel_of(p);
+    return &color.rgba[(size_t(y) * kWidth + x) * 4];
+  };
+  EXPECT_GT(rgba(Vec3(-2.5f, -1.0f, -5.0f))[0], 200);  // left: red
+  EXPECT_LT(rgba(Vec3(-2.5f, -1.0f, -5.0f))[2], 50);
+  EXPECT_GT(rgba(Vec3(2.5f, -1.0f, -5.0f))[2], 200);   // right: blue
+  const RenderSettings s = settings();
+  EXPECT_EQ(rgba(Vec3(-2.5f, 2.7f, -5.0f))[0], s.background & 0xFF);  // top row: empty, background
+  const auto [fx, fy] = pixel_of(Vec3(-2.5f, -1.0f, -5.0f));
+  EXPECT_EQ(id_at(ids, fx, fy), pixel_id({3, 0, 0, DrawKind::kFarFace}));
+  const auto [ex, ey] = pixel_of(Vec3(-2.5f, 2.7f, -5.0f));
+  EXPECT_EQ(id_at(ids, ex, ey), kBackgroundId);
+  // Drawn again, the texture is resident: nothing uploaded.
+  EXPECT_EQ(renderer.render(test_camera(), {}, meshes.provider(), faces).uploaded_bytes, 0u);
+}
+
+TEST_F(RendererTest, FarFaceIsBackgroundToNearGeometryEvenBehindIt) {
+  // Near objects may stick out past their box (digest 002 §3.6): one behind the face still
+  // covers it, because far faces write no depth.
+  Meshes meshes;
+  meshes.add(5, make_box(Vec3(0.0f, -1.0f, -8.0f), Vec3(0.5f)));
+  const Image image = far_image();
+  IdImage object_ids{4, 4, std::vector<uint32_t>(16, 42)};
+  const std::vector<FarFace> faces{far_face(3, image, &object_ids)};
+  Renderer renderer(settings());
+  std::vector<DrawItem> items{{5, 0, rgba8(0, 255, 0)}};
+  renderer.render(test_camera(), items, meshes.provider(), faces);
+  const IdImage ids = renderer.read_ids();
+  const auto [bx, by] = pixel_of(Vec3(0.0f, -1.0f, -7.5f));
+  EXPECT_EQ(id_at(ids, bx, by), 6u);
+  // Elsewhere on the face, its id image: the object the texel shows.
+  const auto [fx, fy] = pixel_of(Vec3(-3.0f, -2.0f, -5.0f));
+  EXPECT_EQ(id_at(ids, fx, fy), 42u);
+}
+
+TEST_F(RendererTest, FarFaceTexturesStayUnderTheirBudget) {
+  RenderSettings s = settings();
+  s.far_face_budget_bytes = 100;  // one 4×4 colour image (64 bytes) at a time
+  Renderer renderer(s);
+  const Image image = far_image();
+  Meshes meshes;
+  for (uint32_t id = 0; id < 3; ++id) {
+    const std::vector<FarFace> faces{far_face(id, image)};
+    const RenderStats stats = renderer.render(test_camera(), {}, meshes.provider(), faces);
+    EXPECT_EQ(stats.uploaded_bytes, 64u);
+    EXPECT_LE(stats.gpu_resident_bytes, 100u);
+  }
+  IdImage ids{4, 4, std::vector<uint32_t>(16, 1)};
+  const std::vector<FarFace> too_large{far_face(9, image, &ids)};  // 128 bytes
+  EXPECT_THROW(renderer.render(test_camera(), {}, meshes.provider(), too_large), Error);
+  IdImage wrong{2, 2, std::vector<uint32_t>(4, 1)};
+  const std::vector<FarFace> mismatched{far_face(10, image, &wrong)};
+  s.far_face_budget_bytes = 1 << 20;
+  Renderer roomy(s);
+  EXPECT_THROW(roomy.render(test_camera(), {}, meshes.provider(), mismatched), Error);
+}
+
 TEST(WritePng, WritesAValidTopDownPng) {
   test::TempDir dir;
   std::string file = dir.file("out.png");

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cellwalk/core/error.hpp"
+#include "render/far_face_textures.hpp"
 #include "render/gpu_mesh_cache.hpp"
 #include "render/shaders.hpp"
 #include "render/text_overlay.hpp"
@@ -114,7 +115,8 @@ GLuint make_overlay_vertex_array(GLuint buffer) {
 }  // namespace
 
 struct Renderer::Impl {
-  explicit Impl(const RenderSettings& s) : settings(s), cache(s.gpu_budget_bytes) {
+  explicit Impl(const RenderSettings& s)
+      : settings(s), cache(s.gpu_budget_bytes), far_textures(s.far_face_budget_bytes) {
     require_gl_45();
     if (s.width <= 0 || s.height <= 0) {
       fail(kWhere, "image size must be positive, got " + std::to_string(s.width) + "x" +
@@ -125,6 +127,7 @@ struct Renderer::Impl {
     vao = make_mesh_vertex_array();
     overlay_program = link_program(render::kOverlayVertexShader, render::kOverlayFragmentShader);
     backdrop_program = link_program(render::kBackdropVertexShader, render::kBackdropFragmentShader);
+    far_program = link_program(render::kFarFaceVertexShader, render::kFarFaceFragmentShader);
     glCreateBuffers(1, &overlay_buffer);
     overlay_vao = make_overlay_vertex_array(overlay_buffer);
   }
@@ -134,6 +137,7 @@ struct Renderer::Impl {
     glDeleteBuffers(1, &overlay_buffer);
     glDeleteProgram(overlay_program);
     glDeleteProgram(backdrop_program);
+    glDeleteProgram(far_program);
     glDeleteVertexArrays(1, &vao);
     glDeleteProgram(program);
     glDeleteFramebuffers(1, &framebuffer);
@@ -201,6 +205,32 @@ struct Renderer::Impl {
     glNamedFramebufferDrawBuffers(framebuffer, 2, color_and_ids);
     glEnable(GL_DEPTH_TEST);
     glDepthMask(GL_TRUE);
+  }
+
+  // The far faces, as background after the clear (and backdrop): no depth test, no depth writes.
+  // Leaves the mesh program bound, as begin_frame does.
+  void draw_far_faces(const Camera& camera, std::span<const FarFace> faces, RenderStats& stats) {
+    if (faces.empty()) return;
+    glDepthMask(GL_FALSE);
+    glDisable(GL_DEPTH_TEST);
+    glUseProgram(far_program);
+    glProgramUniformMatrix4fv(far_program, render::kViewProjectionUniform, 1, GL_FALSE,
+                              glm::value_ptr(camera.view_projection()));
+    for (const FarFace& face : faces) {
+      const render::FaceTextures& t = far_textures.get(face, stats.uploaded_bytes);
+      glBindTextureUnit(0, t.color);
+      glBindTextureUnit(1, t.ids);
+      glProgramUniform3fv(far_program, render::kFarOriginUniform, 1, glm::value_ptr(face.origin));
+      glProgramUniform3fv(far_program, render::kFarAxisUUniform, 1, glm::value_ptr(face.u));
+      glProgramUniform3fv(far_program, render::kFarAxisVUniform, 1, glm::value_ptr(face.v));
+      glProgramUniform1ui(far_program, render::kFarFaceIdUniform, pixel_id({face.id, 0, 0, DrawKind::kFarFace}));
+      glProgramUniform1i(far_program, render::kFarHasIdsUniform, t.ids != 0);
+      glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      stats.triangles += 2;
+    }
+    glEnable(GL_DEPTH_TEST);
+    glDepthMask(GL_TRUE);
+    glUseProgram(program);
   }
 
   void draw(const render::GpuMesh& mesh, const DrawItem& item) {
@@ -297,10 +327,12 @@ struct Renderer::Impl {
 
   RenderSettings settings;
   render::GpuMeshCache cache;
+  render::FarFaceTextures far_textures;
   GLuint color = 0, ids = 0, depth = 0, framebuffer = 0;
   GLuint program = 0, vao = 0;
   GLuint overlay_program = 0, overlay_vao = 0, overlay_buffer = 0;
   GLuint backdrop_program = 0;
+  GLuint far_program = 0;
   std::vector<const DrawItem*> order;
   std::vector<render::OverlayVertex> overlay_vertices;
   uint32_t queued_triangles = 0;  // since the last finish(); at most kDriverBatchTriangles
@@ -311,10 +343,11 @@ Renderer::Renderer(const RenderSettings& settings) : impl_(std::make_unique<Impl
 Renderer::~Renderer() = default;
 
 RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> items,
-                             const MeshProvider& provider) {
+                             const MeshProvider& provider, std::span<const FarFace> far_faces) {
   auto start = std::chrono::steady_clock::now();
   RenderStats stats;
   impl_->begin_frame(camera);
+  impl_->draw_far_faces(camera, far_faces, stats);
   const DrawItem* previous = nullptr;
   for (const DrawItem* item : impl_->sorted(items)) {
     if (!impl_->draw_item(*item, provider, stats)) continue;
@@ -322,7 +355,7 @@ RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> ite
     previous = item;
   }
   impl_->finish();
-  stats.gpu_resident_bytes = impl_->cache.resident_bytes();
+  stats.gpu_resident_bytes = impl_->cache.resident_bytes() + impl_->far_textures.resident_bytes();
   stats.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return stats;

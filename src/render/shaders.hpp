@@ -108,4 +108,43 @@ layout(location = 0) out vec4 o_color;
 void main() { o_color = v_color; }
 )";
 
+// Far faces (stratified rendering): a quad origin + s·u + t·v made in the vertex shader from the
+// vertex id (a 4-vertex strip), showing an RGBA8 image and, where it has one, an id image. Texels
+// with alpha < 0.5 held no far geometry: they are discarded, so the backdrop shows through.
+constexpr int kFarOriginUniform = 1;
+constexpr int kFarAxisUUniform = 2;
+constexpr int kFarAxisVUniform = 3;
+constexpr int kFarFaceIdUniform = 4;   // the face's own pixel id, used where it has no id image
+constexpr int kFarHasIdsUniform = 5;
+
+constexpr const char* kFarFaceVertexShader = R"(#version 450 core
+layout(location = 0) uniform mat4 u_view_projection;
+layout(location = 1) uniform vec3 u_origin;
+layout(location = 2) uniform vec3 u_axis_u;
+layout(location = 3) uniform vec3 u_axis_v;
+out vec2 v_st;
+void main() {
+  vec2 st = vec2(gl_VertexID & 1, gl_VertexID >> 1);
+  v_st = st;
+  gl_Position = u_view_projection * vec4(u_origin + st.x * u_axis_u + st.y * u_axis_v, 1.0);
+}
+)";
+
+constexpr const char* kFarFaceFragmentShader = R"(#version 450 core
+layout(binding = 0) uniform sampler2D u_color;
+layout(binding = 1) uniform usampler2D u_ids;
+layout(location = 4) uniform uint u_face_id;
+layout(location = 5) uniform int u_has_ids;
+in vec2 v_st;
+layout(location = 0) out vec4 o_color;
+layout(location = 1) out uint o_id;
+void main() {
+  vec4 c = texture(u_color, v_st);
+  if (c.a < 0.5) discard;
+  o_color = vec4(c.rgb, 1.0);
+  ivec2 size = textureSize(u_ids, 0);
+  o_id = u_has_ids != 0 ? texelFetch(u_ids, clamp(ivec2(v_st * vec2(size)), ivec2(0), size - 1), 0).r : u_face_id;
+}
+)";
+
 }  // namespace cellwalk::render

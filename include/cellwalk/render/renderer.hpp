@@ -53,6 +53,22 @@ inline uint32_t pixel_id(const DrawItem& item) { return (uint32_t(item.kind) << 
 // valid until the provider is called again. Returning nullptr skips the item (data not ready).
 using MeshProvider = std::function<const Mesh*(const DrawItem&)>;
 
+// A far-field image on a face of a view cell's bounding box (stratified rendering, seed 002
+// §3.1.2): the quad origin + s·u + t·v, s, t in [0, 1], showing `color` with (s, t) = (0, 0) at
+// its first (bottom) row's first pixel. Texels with alpha < 128 show nothing (no far geometry
+// there). `ids`, if given (same size), is written to the id buffer (object id + 1 per texel, 0
+// for none), so the objects the face shows count as drawn; without it the face writes
+// pixel_id({id, 0, ..., kFarFace}). The images must stay valid during render(); the renderer
+// keeps GL copies keyed by `id` (so one id must always show the same images).
+struct FarFace {
+  uint32_t id = 0;
+  Vec3 origin{0.0f};
+  Vec3 u{0.0f};
+  Vec3 v{0.0f};
+  const Image* color = nullptr;
+  const IdImage* ids = nullptr;
+};
+
 // A world-space segment for overlays: frustums and boxes in a bird's-eye view.
 struct LineSegment {
   Vec3 a{0.0f};
@@ -81,6 +97,8 @@ struct RenderSettings {
   // GPU-side vertex and index buffers are cached under this many bytes (LRU). A mesh larger
   // than the whole budget is drawn from a transient buffer and not kept.
   uint64_t gpu_budget_bytes = 512ull << 20;
+  // Far-face textures are kept under this many bytes (LRU), apart from the meshes.
+  uint64_t far_face_budget_bytes = 64ull << 20;
 };
 
 // Triangles queued between waits for the GPU. Mesa's llvmpipe bins every triangle queued since
@@ -99,8 +117,10 @@ class Renderer {
   // Renders items into the offscreen targets and waits for the GPU, so the time is real.
   // Items are drawn in ascending (object, lod) order whatever their order in `items`, so any
   // subset of a list renders its objects' pixels exactly as the full list does.
+  // Far faces are drawn first, as background: no depth test and no depth writes, so near
+  // geometry that sticks out past its box is never hidden by them (digest 002 §3.6).
   RenderStats render(const Camera& camera, std::span<const DrawItem> items,
-                     const MeshProvider& provider);
+                     const MeshProvider& provider, std::span<const FarFace> far_faces = {});
 
   // Overlays, drawn over the colour target of the last render() (so read_color() and present()
   // include them) without depth test; the id target is left as render() wrote it. Call them
