@@ -1,5 +1,7 @@
 // cellwalk stratify: the stratified rendering system's commands (seed 002, Xiong 1996).
 //   plan   viewcell and box sizing, cell counts and the multi-shell analysis (digest 002 §3.3–§3.11)
+//   build  viewcells, near lists and baked far faces, stored in the world (§3.1)
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -12,8 +14,11 @@
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/stratified/sizing.hpp"
+#include "cellwalk/systems/stratified/stored_stratified.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
+#include "core/progress.hpp"
+#include "precompute/pvs_builder.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -143,7 +148,7 @@ void print_plan(const Json& j) {
                 (unsigned long long)(*it)["cells"].get<uint64_t>());
 }
 
-void register_plan(CLI::App& stratify) {
+void register_stratify_plan(CLI::App& stratify) {
   auto* cmd = stratify.add_subcommand("plan", "Size viewcells and boxes for an angular error bound (Eqs. 2.2, 2.3, 4.1)");
   auto o = std::make_shared<PlanOptions>();
   cmd->add_option("world", o->world, "World file (.cww) to size for: its extent and polygon density (optional)");
@@ -178,12 +183,104 @@ void register_plan(CLI::App& stratify) {
   });
 }
 
+struct BuildOptions {
+  std::string world, out, along;
+  float along_margin = 0.0f;
+  double alpha_deg = 7.5;  // Table 6.1, config A
+  double box = 330.0;      // Table 6.1
+  std::string sizing = "eq22";
+  int resolution = 512;
+  bool json = false;
+};
+
+// v for the options, sized against the world's extent (Eq. 2.2 takes the model length l).
+double build_side(const BuildOptions& o, const World& world) {
+  const Vec3 size = world.info().bounds.size();
+  const ModelExtent model{std::max(size.x, size.z), std::max(size.y, 1.0f)};
+  const Sizing sizing = o.sizing == "strict" ? Sizing::kStrict : o.sizing == "numerical" ? Sizing::kNumerical : Sizing::kEq22;
+  if (!(o.box < model.length))
+    fail("stratify build", "the box (" + metres(o.box) + ") is not smaller than the world (" + metres(model.length) +
+                               "): every object would be near; give a smaller --box");
+  return viewcell_side(sizing, rad(o.alpha_deg), o.box, model);
+}
+
+void run_build(const BuildOptions& o) {
+  const std::string out = o.out.empty() ? o.world : o.out;
+  refuse_same_files({}, {out});
+  const World world(o.world);
+  const float v = float(build_side(o, world));
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<Aabb> bounds(world.object_count());
+  for (ObjectId id = 0; id < world.object_count(); ++id) bounds[id] = world.object(id).bounds;
+  Viewcells cells = build_viewcells(default_cell_region(world.info().bounds, world.info().nav, true), v, float(o.box), bounds);
+  if (!o.along.empty()) {
+    const CameraPath path = read_path(o.along);
+    warn_if_other_world(path, o.along, world.info(), o.world);
+    cells.partition = visibility::cells_along(*cells.partition, path, o.along_margin);
+  }
+  const double cells_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  FarFieldBaker baker(world, o.resolution);
+  std::unique_ptr<Progress> progress;
+  const StratifiedParams params{float(rad(o.alpha_deg)), v, float(o.box), o.sizing, o.resolution};
+  const StratifiedSizes sizes = write_world_with_stratified(
+      world, out, cells, params,
+      [&](CellId c) { return baker.bake(cells.partition->cell(c).box.center(), float(o.box), cells.near.near(c)); },
+      [&](uint64_t done, uint64_t total) {
+        if (!progress) progress = std::make_unique<Progress>("stratify bake", total);
+        progress->update(done);
+      });
+  if (progress) progress->finish();
+  const double per_cell_ms = sizes.baked_cells ? 1e3 * sizes.bake_seconds / sizes.baked_cells : 0.0;
+  const uint64_t stored = sizes.color_bytes + sizes.id_bytes + sizes.depth_bytes;
+  if (o.json) {
+    const Json j = {{"output", out}, {"alpha_deg", o.alpha_deg}, {"v", v}, {"b", o.box}, {"sizing", o.sizing},
+                    {"resolution", o.resolution}, {"cells", sizes.cells}, {"baked_cells", sizes.baked_cells},
+                    {"kd_height", cells.height}, {"peak_held_ids", cells.peak_held_ids}, {"near_ids", sizes.near_ids},
+                    {"near_bytes", sizes.near_bytes}, {"faces", sizes.faces}, {"raw_face_bytes", sizes.raw_face_bytes},
+                    {"color_bytes", sizes.color_bytes}, {"id_bytes", sizes.id_bytes}, {"depth_bytes", sizes.depth_bytes},
+                    {"cells_seconds", cells_s}, {"bake_seconds", sizes.bake_seconds}, {"bake_ms_per_cell", per_cell_ms}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("stratify build: α = %g°, v = %.2f m (%s), b = %g m: %llu cells (k-d height %u), %llu baked, %llu faces\n",
+              o.alpha_deg, v, o.sizing.c_str(), o.box, (unsigned long long)sizes.cells, cells.height,
+              (unsigned long long)sizes.baked_cells, (unsigned long long)sizes.faces);
+  std::printf("  near lists: %.1f objects a cell on average, %llu bytes; built in %.2f s (peak %llu ids held)\n",
+              sizes.cells ? double(sizes.near_ids) / sizes.cells : 0.0, (unsigned long long)sizes.near_bytes, cells_s,
+              (unsigned long long)cells.peak_held_ids);
+  std::printf("  far faces %d²: %.1f MiB stored (colour %.1f, ids %.1f, depth %.1f) of %.1f MiB raw; %.0f ms a cell\n",
+              o.resolution, stored / 1048576.0, sizes.color_bytes / 1048576.0, sizes.id_bytes / 1048576.0,
+              sizes.depth_bytes / 1048576.0, sizes.raw_face_bytes / 1048576.0, per_cell_ms);
+  std::printf("  wrote %s\n", out.c_str());
+}
+
+void register_stratify_build(CLI::App& stratify) {
+  auto* cmd = stratify.add_subcommand("build", "Make the viewcells, near lists and far faces of a world (stored in it)");
+  auto o = std::make_shared<BuildOptions>();
+  cmd->add_option("world", o->world, "World file (.cww)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("-o,--out", o->out, "Output world file (default: rewrite the input in place, atomically)");
+  cmd->add_option("--alpha", o->alpha_deg, "Largest angular error of the far field, degrees")
+      ->check(number_in(0, 89, true))->capture_default_str();
+  cmd->add_option("--box", o->box, "Bounding box side b, metres")->check(number_in(0, 1e7, true))->capture_default_str();
+  cmd->add_option("--sizing", o->sizing, "How v follows from α and b: eq22 (the thesis), strict or numerical")
+      ->check(CLI::IsMember({"eq22", "strict", "numerical"}))->capture_default_str();
+  cmd->add_option("--resolution", o->resolution, "Texels per face side")
+      ->check(CLI::Range(1, kMaxFaceResolution))->capture_default_str();
+  auto* along = cmd->add_option("--along", o->along, "Bake only the cells near this camera path (cellwalk path); the others are stored as skipped")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--along-margin", o->along_margin, "--along: metres around the path whose cells are baked")
+      ->check(number_in(0, 1e6))->capture_default_str()->needs(along);
+  cmd->add_flag("--json", o->json, "Machine-readable output");
+  cmd->callback([o] { run_build(*o); });
+}
+
 }  // namespace
 
 void register_stratify(CLI::App& root) {
   auto* cmd = root.add_subcommand("stratify", "Stratified rendering (seed 002): near polygons, far field on box faces");
   cmd->require_subcommand(1);
-  register_plan(*cmd);
+  register_stratify_plan(*cmd);
+  register_stratify_build(*cmd);
 }
 
 }  // namespace cellwalk::app

@@ -395,6 +395,14 @@ IdImage Renderer::read_ids() const {
   return image;
 }
 
+std::vector<float> Renderer::read_depth() const {
+  std::vector<float> depth(size_t(impl_->settings.width) * impl_->settings.height);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, impl_->framebuffer);
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, impl_->settings.width, impl_->settings.height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  return depth;
+}
+
 void Renderer::present(int window_width, int window_height) const {
   const RenderSettings& s = impl_->settings;
   glNamedFramebufferReadBuffer(impl_->framebuffer, GL_COLOR_ATTACHMENT0);

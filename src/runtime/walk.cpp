@@ -21,7 +21,7 @@ FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& ca
     if (!mesh) ++unavailable;
     return mesh;
   };
-  RenderStats rs = renderer.render(camera, items, provider);
+  RenderStats rs = renderer.render(camera, items, provider, strategy.far_faces());
   const double fetch_ms = (stats.io_ms - io_before) + (stats.decode_ms - decode_before);
   stats.render_ms = std::max(0.0, rs.ms - fetch_ms);
   stats.triangles = rs.triangles;

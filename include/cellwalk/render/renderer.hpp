@@ -9,6 +9,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "cellwalk/core/camera.hpp"
 #include "cellwalk/render/image.hpp"
@@ -133,6 +134,8 @@ class Renderer {
 
   Image read_color() const;
   IdImage read_ids() const;
+  // The depth target: window depth in [0, 1] per pixel (1 where nothing was drawn), rows bottom-up.
+  std::vector<float> read_depth() const;
   // Copies the colour target to the default framebuffer (the window) at its size.
   void present(int window_width, int window_height) const;
 

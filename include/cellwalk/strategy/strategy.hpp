@@ -4,6 +4,7 @@
 #pragma once
 
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,10 @@ class Strategy {
   // next call. Adds I/O and decode time, bytes read, hits and misses to `stats`. nullptr means
   // the data is not available this frame (the frame then counts as a stall).
   virtual const Mesh* mesh(const DrawItem& item, FrameStats& stats) = 0;
+
+  // The far faces (stratified rendering) the last select() chose, drawn as background under the
+  // items; their images stay valid until the next select(). Empty for every other strategy.
+  virtual std::span<const FarFace> far_faces() const { return {}; }
 
   // Bytes the strategy holds in memory now (geometry, index, visibility data): what its memory
   // budget bounds.

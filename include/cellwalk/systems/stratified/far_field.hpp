@@ -1,0 +1,65 @@
+// Stratified rendering (seed 002, Xiong 1996) §3.1.2 (digest 002 §3.6): the far field of a
+// viewcell, every object that is not near drawn from the cell centre C onto the faces of its
+// bounding box. Each face is a 90° × 90° perspective view from C with the face as image plane (a
+// cube-map face drawn at its true distance b/2, which the error analysis assumes); its colour,
+// the id of the object each texel shows, and the texel's distance from C are kept.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include "cellwalk/core/camera.hpp"
+#include "cellwalk/render/image.hpp"
+#include "cellwalk/render/renderer.hpp"
+#include "cellwalk/store/world.hpp"
+
+namespace cellwalk::stratified {
+
+// Faces in the order −Z, −X, +Z, +X (the four vertical faces), +Y, −Y.
+constexpr int kFaceCount = 6;
+constexpr int kMaxFaceResolution = 4096;
+
+// The camera that sees face `face` of the box of side b around c: at c, looking out through
+// the face's centre, 90° square, near plane just inside the face.
+Camera face_camera(const Vec3& c, float b, int face, float far_plane);
+// The face as the renderer draws it: origin + s·u + t·v, (s, t) = (0, 0) at the image's bottom
+// left as face_camera sees it.
+FarFace face_quad(const Vec3& c, float b, int face, uint32_t id);
+
+// One baked face. depth: per texel the distance from C along the view ray to the far surface
+// (0 where nothing far is seen).
+struct FaceImage {
+  int face = 0;
+  Image color;    // alpha 0 where nothing far is seen
+  IdImage ids;    // object id + 1, 0 for none
+  std::vector<float> depth;
+};
+
+// A cell's far field: its non-empty faces, in face order (empty faces are skipped, §3.6).
+struct CellFarField {
+  std::vector<FaceImage> faces;
+};
+
+// Renders far fields with a headless GL context of its own, made on the constructing thread;
+// every call must come from that thread. Objects are drawn at level 0, decoded from the world
+// on demand and kept in the renderer's GPU cache.
+class FarFieldBaker {
+ public:
+  // Throws Error for a resolution outside [1, kMaxFaceResolution] or when no headless context
+  // can be made.
+  FarFieldBaker(const World& world, int resolution, uint64_t gpu_budget_bytes = 256ull << 20);
+  ~FarFieldBaker();
+  int resolution() const;
+  // The far field of a cell centred at c with box side b: every object not in `near` (ascending
+  // ids) whose box meets a face's frustum, drawn from c.
+  CellFarField bake(const Vec3& c, float b, std::span<const ObjectId> near);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk::stratified

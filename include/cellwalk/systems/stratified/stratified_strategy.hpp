@@ -1,0 +1,58 @@
+// Stratified rendering (seed 002, Xiong 1996) §3.2, §5.1, §5.2 (digest 002 §2.2, §3.7): the
+// walkthrough system. Each frame: find the viewcell holding the eye; on entering a new one, load
+// its near list and far faces; draw the far faces as background and the near objects as
+// polygons (frustum culled). The cells and faces come from `cellwalk stratify build`.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+#include "cellwalk/strategy/strategy.hpp"
+
+namespace cellwalk {
+
+// Name: "stratified[:key=value,...]" with keys
+//   show=full         the thesis's show styles (§5.1): full (near polygons + far faces), near
+//                     (near objects only), far-objects (the far objects as polygons, nothing
+//                     near), far-texture (the far faces only), brute (every object)
+//   cull=1            frustum-cull the objects drawn as polygons (0: draw them all)
+struct StratifiedConfig {
+  enum class Show { kFull, kNear, kFarObjects, kFarTexture, kBrute };
+  Show show = Show::kFull;
+  bool cull = true;
+};
+bool is_stratified_strategy_name(const std::string& name);
+StratifiedConfig parse_stratified_strategy_name(const std::string& name);
+
+// What the run did at cell boundaries (digest §3.7, Table 3.1).
+struct StratifiedCounters {
+  uint64_t frames = 0;
+  uint64_t crossings = 0;       // frames that entered another cell
+  uint64_t loaded_bytes = 0;    // far-field records read
+  double load_ms = 0.0;         // reading and decoding them
+  uint64_t near_objects = 0;    // Σ over frames of the current cell's near list
+};
+
+class StratifiedStrategy : public Strategy {
+ public:
+  // Throws Error if the world has no stratified preprocessing (naming the command that makes it)
+  // or the budget cannot hold the geometry store and one cell's far field.
+  StratifiedStrategy(const World& world, const StratifiedConfig& config, const StrategyOptions& options);
+  ~StratifiedStrategy() override;
+  std::string name() const override;
+  // Throws Error when the camera leaves the viewcells or stands in a cell `--along` left unbaked.
+  void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
+  std::span<const FarFace> far_faces() const override;
+  uint64_t resident_bytes() const override;
+  uint64_t peak_resident_bytes() const override;
+  const StratifiedCounters& counters() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk

@@ -1,0 +1,127 @@
+// Stratified thesis §3.1.2, Fig. 3-3, §5.2.3 (digest 002 §3.6): far-field baking, every non-near
+// object rendered from the cell centre onto the box faces.
+#include "cellwalk/systems/stratified/far_field.hpp"
+
+#include <cmath>
+#include <optional>
+#include <string>
+
+#include "cellwalk/core/error.hpp"
+
+namespace cellwalk::stratified {
+namespace {
+
+// (yaw, pitch) of each face's view, in kFaceCount order (−Z, −X, +Z, +X, +Y, −Y).
+constexpr float kFaceAngles[kFaceCount][2] = {{0, 0}, {90, 0}, {180, 0}, {270, 0}, {0, 90}, {0, -90}};
+
+// Transparent clear: texels no far object covers keep alpha 0, and show nothing at run time.
+constexpr Rgba8 kEmpty = 0;
+
+}  // namespace
+
+Camera face_camera(const Vec3& c, float b, int face, float far_plane) {
+  Camera camera;
+  camera.position = c;
+  camera.yaw_deg = kFaceAngles[face][0];
+  camera.pitch_deg = kFaceAngles[face][1];
+  camera.fov_y_deg = 90.0f;
+  camera.aspect = 1.0f;
+  // Every far object lies outside the box, at least b/2 along the face's axis: a near plane just
+  // inside the face clips nothing far and keeps depth precise.
+  camera.near_plane = 0.49f * b;
+  camera.far_plane = far_plane;
+  return camera;
+}
+
+FarFace face_quad(const Vec3& c, float b, int face, uint32_t id) {
+  const Camera camera = face_camera(c, b, face, 1.0f);
+  const float h = 0.5f * b;
+  const Vec3 f = camera.forward(), r = camera.right(), u = camera.up();
+  FarFace quad;
+  quad.id = id;
+  quad.origin = c + h * (f - r - u);
+  quad.u = 2.0f * h * r;
+  quad.v = 2.0f * h * u;
+  return quad;
+}
+
+struct FarFieldBaker::Impl {
+  const World& world;
+  int resolution;
+  std::unique_ptr<GlContext> context;
+  std::unique_ptr<Renderer> renderer;
+  Mesh mesh;  // the provider's last decoded mesh: valid until the next call
+  std::vector<DrawItem> items;
+  float far_plane;
+
+  Impl(const World& w, int res, uint64_t budget) : world(w), resolution(res) {
+    if (res < 1 || res > kMaxFaceResolution)
+      fail("stratify", "face resolution " + std::to_string(res) + " must lie in [1, " + std::to_string(kMaxFaceResolution) + "]");
+    context = GlContext::headless();
+    RenderSettings settings;
+    settings.width = settings.height = res;
+    settings.background = kEmpty;
+    settings.gpu_budget_bytes = budget;
+    renderer = std::make_unique<Renderer>(settings);
+    far_plane = 2.0f * glm::length(world.info().bounds.size()) + 10.0f;
+  }
+
+  // The texel distances from c along each view ray, from window depth (perspective: the eye-space
+  // depth is n·f / (f − d·(f − n)), and a ray through texel (x, y) is √(1 + x² + y²) times longer).
+  std::vector<float> distances(const std::vector<float>& window_depth, const Camera& camera) const {
+    const float n = camera.near_plane, f = camera.far_plane;
+    std::vector<float> out(window_depth.size(), 0.0f);
+    for (int j = 0; j < resolution; ++j)
+      for (int i = 0; i < resolution; ++i) {
+        const size_t k = size_t(j) * resolution + i;
+        const float d = window_depth[k];
+        if (d >= 1.0f) continue;
+        const float x = (2.0f * i + 1.0f) / resolution - 1.0f, y = (2.0f * j + 1.0f) / resolution - 1.0f;
+        out[k] = n * f / (f - d * (f - n)) * std::sqrt(1.0f + x * x + y * y);
+      }
+    return out;
+  }
+
+  // The face's image, or nullopt when no far object is in its frustum or none covers a texel.
+  std::optional<FaceImage> bake_face(const Vec3& c, float b, int face, std::span<const ObjectId> near) {
+    const Camera camera = face_camera(c, b, face, far_plane);
+    const Frustum frustum(camera);
+    items.clear();
+    size_t next_near = 0;
+    for (ObjectId id = 0; id < world.object_count(); ++id) {
+      while (next_near < near.size() && near[next_near] < id) ++next_near;
+      if (next_near < near.size() && near[next_near] == id) continue;
+      if (frustum.intersects(world.object(id).bounds)) items.push_back({id, 0, world.object(id).color});
+    }
+    if (items.empty()) return std::nullopt;
+    renderer->render(camera, items, [this](const DrawItem& item) -> const Mesh* {
+      mesh = world.decode_level(item.id, 0, world.read_level(item.id, 0));
+      return &mesh;
+    });
+    FaceImage image;
+    image.face = face;
+    image.ids = renderer->read_ids();
+    bool any = false;
+    for (const uint32_t id : image.ids.ids) any |= id != kBackgroundId;
+    if (!any) return std::nullopt;
+    image.color = renderer->read_color();
+    image.depth = distances(renderer->read_depth(), camera);
+    return image;
+  }
+};
+
+FarFieldBaker::FarFieldBaker(const World& world, int resolution, uint64_t gpu_budget_bytes)
+    : impl_(std::make_unique<Impl>(world, resolution, gpu_budget_bytes)) {}
+
+FarFieldBaker::~FarFieldBaker() = default;
+
+int FarFieldBaker::resolution() const { return impl_->resolution; }
+
+CellFarField FarFieldBaker::bake(const Vec3& c, float b, std::span<const ObjectId> near) {
+  CellFarField field;
+  for (int face = 0; face < kFaceCount; ++face)
+    if (std::optional<FaceImage> image = impl_->bake_face(c, b, face, near)) field.faces.push_back(std::move(*image));
+  return field;
+}
+
+}  // namespace cellwalk::stratified

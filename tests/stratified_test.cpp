@@ -1,0 +1,228 @@
+// Stratified rendering end to end (seed 002 §3.1.2, §3.2): a small random city (Appendix A)
+// through `cellwalk stratify build`, its stored near lists and far faces read back, and the
+// `stratified` strategy checked against brute force on the same frames.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/render/renderer.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/stratified/far_field.hpp"
+#include "cellwalk/systems/stratified/sizing.hpp"
+#include "cellwalk/systems/stratified/stored_stratified.hpp"
+#include "cellwalk/systems/stratified/stratified_strategy.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk {
+namespace {
+
+using namespace stratified;
+
+constexpr int kResolution = 64;
+constexpr float kBox = 120.0f;
+
+// One city for the suite: 4 × 4 blocks (about 400 m square), stratified at α = 10°, b = 120 m.
+class StratifiedSystem : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new test::TempDir;
+    const std::string scene = dir_->file("city.cwscene");
+    world_file_ = dir_->file("city.cww");
+    for (const std::string& args :
+         {"generate stratified-city --blocks-x 4 --blocks-z 4 --seed 5 -o " + scene, "build " + scene + " -o " + world_file_,
+          "stratify build " + world_file_ + " --alpha 10 --box 120 --resolution 64"}) {
+      const test::CommandResult r = test::run_cellwalk(args);
+      ASSERT_EQ(r.exit_code, 0) << args << ": " << r.output;
+    }
+    world_ = new World(world_file_);
+    context_ = GlContext::headless().release();
+  }
+  static void TearDownTestSuite() {
+    delete context_;
+    delete world_;
+    delete dir_;
+  }
+
+  static inline test::TempDir* dir_ = nullptr;
+  static inline std::string world_file_;
+  static inline World* world_ = nullptr;
+  static inline GlContext* context_ = nullptr;
+};
+
+TEST_F(StratifiedSystem, StoredNearListsAreTheObjectsMeetingEachBox) {
+  const StoredStratified stored(*world_);
+  EXPECT_NEAR(stored.params().b, kBox, 1e-4);
+  const Vec3 size = world_->info().bounds.size();
+  EXPECT_NEAR(stored.params().v, eq22_viewcell_side(10 * M_PI / 180, kBox, std::max(size.x, size.z)), 0.01);
+  ASSERT_GT(stored.partition().cell_count(), 20u);
+  for (CellId c = 0; c < stored.partition().cell_count(); ++c) {
+    const Aabb box = bounding_box(stored.partition().cell(c), kBox);
+    std::vector<ObjectId> expected;
+    for (ObjectId id = 0; id < world_->object_count(); ++id)
+      if (world_->object(id).bounds.overlaps(box)) expected.push_back(id);
+    EXPECT_EQ(stored.near(c), expected) << "cell " << c;
+  }
+}
+
+TEST_F(StratifiedSystem, FarFacesShowOnlyFarObjectsAtTheirTrueDistance) {
+  const StoredStratified stored(*world_);
+  size_t faces = 0;
+  for (CellId c = 0; c < stored.partition().cell_count(); c += 7) {
+    const std::vector<ObjectId> near = stored.near(c);
+    const std::set<ObjectId> near_set(near.begin(), near.end());
+    const CellFarField field = stored.far_field(c);
+    EXPECT_LE(field.faces.size(), 6u);
+    const Vec3 centre = stored.partition().cell(c).box.center();
+    for (const FaceImage& f : field.faces) {
+      ++faces;
+      ASSERT_EQ(f.color.width, kResolution);
+      for (size_t t = 0; t < f.ids.ids.size(); ++t) {
+        const uint32_t id = f.ids.ids[t];
+        if (id == kBackgroundId) {
+          EXPECT_EQ(f.color.rgba[t * 4 + 3], 0) << "an empty texel is transparent";
+          continue;
+        }
+        EXPECT_FALSE(near_set.count(id - 1)) << "near object " << id - 1 << " on a far face of cell " << c;
+        // The texel's point lies outside the box, on the object it names (within its bounds).
+        const int i = int(t % kResolution), j = int(t / kResolution);
+        const Camera cam = face_camera(centre, kBox, f.face, 1e4f);
+        const float x = (2.0f * i + 1) / kResolution - 1, y = (2.0f * j + 1) / kResolution - 1;
+        const Vec3 dir = glm::normalize(cam.forward() + x * cam.right() + y * cam.up());
+        const Vec3 p = centre + dir * f.depth[t];
+        EXPECT_GE(f.depth[t], 0.5f * kBox * 0.999f);
+        Aabb grown = world_->object(id - 1).bounds;
+        grown.min -= Vec3(0.02f * f.depth[t]);
+        grown.max += Vec3(0.02f * f.depth[t]);
+        EXPECT_TRUE(grown.contains(p)) << "texel " << t << " of cell " << c << " face " << f.face;
+      }
+    }
+  }
+  EXPECT_GT(faces, 4u);
+}
+
+TEST_F(StratifiedSystem, FaceQuadMatchesItsCamera) {
+  const Vec3 c(10.0f, 1.7f, -20.0f);
+  for (int face = 0; face < kFaceCount; ++face) {
+    const FarFace quad = face_quad(c, kBox, face, 0);
+    const Camera cam = face_camera(c, kBox, face, 1e4f);
+    for (const auto& [s, t] : {std::pair{0.25f, 0.75f}, {0.5f, 0.5f}, {0.9f, 0.1f}}) {
+      const Vec4 clip = cam.view_projection() * Vec4(quad.origin + s * quad.u + t * quad.v, 1.0f);
+      EXPECT_NEAR(clip.x / clip.w, 2 * s - 1, 1e-4) << face;
+      EXPECT_NEAR(clip.y / clip.w, 2 * t - 1, 1e-4) << face;
+    }
+    EXPECT_NEAR(glm::length(quad.u), kBox, 1e-3);
+  }
+}
+
+TEST_F(StratifiedSystem, DamagedFarRecordsAreRefusedWithWhere) {
+  const StoredStratified stored(*world_);
+  CellId c = 0;
+  while (stored.far_field_bytes(c) < 64) ++c;
+  StratifiedSizes sizes;
+  const std::vector<uint8_t> good = encode_far_field(stored.far_field(c), kBox, sizes);
+  EXPECT_NO_THROW(decode_far_field(good, kBox, kResolution, world_->object_count(), "x"));
+  std::vector<uint8_t> truncated(good.begin(), good.end() - 5);
+  EXPECT_THROW(decode_far_field(truncated, kBox, kResolution, world_->object_count(), "x"), Error);
+  std::vector<uint8_t> mask = good;
+  mask[0] |= 0x80;
+  EXPECT_THROW(decode_far_field(mask, kBox, kResolution, world_->object_count(), "x"), Error);
+  EXPECT_THROW(decode_far_field(good, kBox, kResolution * 2, world_->object_count(), "x"), Error);
+  EXPECT_THROW(decode_far_field(good, kBox, kResolution, 1, "x"), Error);  // ids past the objects
+}
+
+std::vector<FrameStats> frames_of(const std::string& strategy, const World& world, const CameraPath& path,
+                                  Renderer& renderer, std::vector<Image>* images, uint64_t budget = 0) {
+  StrategyOptions options;
+  options.memory_budget_bytes = budget;
+  const std::unique_ptr<Strategy> s = make_strategy(strategy, world, options);
+  Camera camera;
+  camera.aspect = 1.0f;
+  camera.fov_y_deg = 90.0f;
+  std::vector<FrameStats> out;
+  for (const PathFrame& f : path.frames) {
+    apply(f, camera);
+    out.push_back(render_frame(*s, renderer, camera, f.time));
+    if (images) images->push_back(renderer.read_color());
+  }
+  return out;
+}
+
+CameraPath city_path(const std::string& world_file, const test::TempDir& dir) {
+  const std::string path = dir.file("p.path");
+  const test::CommandResult r = test::run_cellwalk("path " + world_file + " -o " + path + " --frames 120 --kind fast --seed 3");
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return read_path(path);
+}
+
+TEST_F(StratifiedSystem, ShowBruteDrawsWhatBruteDrawsAndFullDrawsFewerTriangles) {
+  RenderSettings settings;
+  settings.width = settings.height = 128;
+  Renderer renderer(settings);
+  const CameraPath path = city_path(world_file_, *dir_);
+  std::vector<Image> brute_images, show_brute_images;
+  const auto brute = frames_of("brute", *world_, path, renderer, &brute_images);
+  const auto show_brute = frames_of("stratified:show=brute", *world_, path, renderer, &show_brute_images);
+  const auto full = frames_of("stratified", *world_, path, renderer, nullptr);
+  const auto near = frames_of("stratified:show=near", *world_, path, renderer, nullptr);
+  uint64_t brute_tris = 0, full_tris = 0;
+  for (size_t i = 0; i < path.frames.size(); ++i) {
+    EXPECT_EQ(show_brute_images[i].rgba, brute_images[i].rgba) << "frame " << i;
+    brute_tris += brute[i].triangles;
+    full_tris += full[i].triangles;
+    EXPECT_LE(near[i].triangles + 12, full[i].triangles + 12);
+  }
+  EXPECT_LT(full_tris, brute_tris);
+}
+
+TEST_F(StratifiedSystem, BudgetHoldsTheFacesOrTheRunIsRefused) {
+  RenderSettings settings;
+  settings.width = settings.height = 64;
+  Renderer renderer(settings);
+  const CameraPath path = city_path(world_file_, *dir_);
+  const uint64_t budget = 8ull << 20;
+  StrategyOptions options;
+  options.memory_budget_bytes = budget;
+  const std::unique_ptr<Strategy> s = make_strategy("stratified", *world_, options);
+  Camera camera;
+  for (const PathFrame& f : path.frames) {
+    apply(f, camera);
+    render_frame(*s, renderer, camera, f.time);
+    EXPECT_LE(s->resident_bytes(), budget);
+  }
+  EXPECT_LE(s->peak_resident_bytes(), budget);
+  EXPECT_GT(s->peak_resident_bytes(), uint64_t(kResolution) * kResolution * 12);  // a face was held
+  options.memory_budget_bytes = 64 << 10;
+  EXPECT_THROW(
+      {
+        const std::unique_ptr<Strategy> tiny = make_strategy("stratified", *world_, options);
+        apply(path.frames.front(), camera);
+        render_frame(*tiny, renderer, camera, 0.0);
+      },
+      Error);
+}
+
+TEST(StratifiedName, SettingsAreParsedAndBadOnesRefused) {
+  EXPECT_EQ(parse_stratified_strategy_name("stratified:show=far-texture").show, StratifiedConfig::Show::kFarTexture);
+  EXPECT_FALSE(parse_stratified_strategy_name("stratified:cull=0").cull);
+  EXPECT_THROW(parse_stratified_strategy_name("stratified:show=nothing"), Error);
+  EXPECT_THROW(parse_stratified_strategy_name("stratified:speed=2"), Error);
+}
+
+TEST(StratifiedWorld, AWorldWithoutThePreprocessingNamesTheCommand) {
+  const test::TempDir dir;
+  const World world(test::write_street_world(dir, 4));
+  try {
+    StoredStratified stored(world);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("stratify build"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace cellwalk
