@@ -105,6 +105,35 @@ TEST_F(StratifiedSystem, FarFacesShowOnlyFarObjectsAtTheirTrueDistance) {
   EXPECT_GT(faces, 4u);
 }
 
+TEST_F(StratifiedSystem, MeasuredFarAngleIsZeroAtTheCentreAndWithinTheCheckersBound) {
+  // From C the faces show every far point exactly where it is; from anywhere in the cell the
+  // displacement stays under the numerical worst case for this cell size, box and model, which
+  // is where Eq. 2.2's α is exceeded by a few per cent (digest §3.3).
+  const StoredStratified stored(*world_);
+  const Vec3 size = world_->info().bounds.size();
+  const double bound = worst_case_angle(stored.params().v, kBox, {std::max(size.x, size.z), size.y}).angle;
+  double largest = 0.0;
+  for (CellId c = 0; c < stored.partition().cell_count(); c += 5) {
+    const CellFarField field = stored.far_field(c);
+    const ViewCell& cell = stored.partition().cell(c);
+    Camera camera;
+    camera.fov_y_deg = 100.0f;
+    camera.aspect = 1.0f;
+    camera.position = cell.box.center();
+    for (const float yaw : {0.0f, 90.0f, 180.0f, 270.0f}) {
+      camera.yaw_deg = yaw;
+      camera.position = cell.box.center();
+      EXPECT_LT(far_field_angle(field, cell.box.center(), kBox, camera), 1e-3) << "cell " << c;
+      camera.position = cell.box.min + Vec3(0.0f, 0.25f, 0.0f);  // a corner, at eye height
+      const double corner = far_field_angle(field, cell.box.center(), kBox, camera);
+      largest = std::max(largest, corner);
+      // The 16-bit depth and the texel's centre add a little: half a texel of 90°/64.
+      EXPECT_LE(corner, bound + 0.5 * (M_PI / 2) / kResolution) << "cell " << c << " yaw " << yaw;
+    }
+  }
+  EXPECT_GT(largest, 0.2 * stored.params().alpha);  // the corners do see parallax
+}
+
 TEST_F(StratifiedSystem, FaceQuadMatchesItsCamera) {
   const Vec3 c(10.0f, 1.7f, -20.0f);
   for (int face = 0; face < kFaceCount; ++face) {

@@ -2,6 +2,7 @@
 // object rendered from the cell centre onto the box faces.
 #include "cellwalk/systems/stratified/far_field.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -43,6 +44,32 @@ FarFace face_quad(const Vec3& c, float b, int face, uint32_t id) {
   quad.u = 2.0f * h * r;
   quad.v = 2.0f * h * u;
   return quad;
+}
+
+double far_field_angle(const CellFarField& field, const Vec3& c, float b, const Camera& camera) {
+  const Frustum frustum(camera);
+  const glm::dvec3 eye(camera.position);
+  double worst = 0.0;
+  for (const FaceImage& f : field.faces) {
+    const Camera face = face_camera(c, b, f.face, 1.0f);
+    const Vec3 fwd = face.forward(), right = face.right(), up = face.up();
+    const int res = f.color.width;
+    for (int j = 0; j < res; ++j)
+      for (int i = 0; i < res; ++i) {
+        const float depth = f.depth[size_t(j) * res + i];
+        if (depth <= 0.0f) continue;
+        const float x = (2.0f * i + 1.0f) / res - 1.0f, y = (2.0f * j + 1.0f) / res - 1.0f;
+        const Vec3 ray = fwd + x * right + y * up;  // reaches the face at t = b/2
+        const Vec3 q = c + 0.5f * b * ray;
+        const Vec3 p = c + glm::normalize(ray) * depth;
+        Aabb point;
+        point.extend(q);
+        if (!frustum.intersects(point)) continue;
+        const glm::dvec3 to_q = glm::dvec3(q) - eye, to_p = glm::dvec3(p) - eye;
+        worst = std::max(worst, std::atan2(glm::length(glm::cross(to_q, to_p)), glm::dot(to_q, to_p)));
+      }
+  }
+  return worst;
 }
 
 struct FarFieldBaker::Impl {

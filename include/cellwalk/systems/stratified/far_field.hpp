@@ -43,6 +43,12 @@ struct CellFarField {
   std::vector<FaceImage> faces;
 };
 
+// The far field's angular error seen from `camera` [ours; the thesis only bounds it, §2.3]: the
+// largest angle, over the baked texels inside the camera's frustum, between where the far point
+// really is (P = c + its view ray · depth) and where the face shows it (Q, the texel's centre on
+// the face), both seen from the eye. Radians; 0 when no far texel is in view.
+double far_field_angle(const CellFarField& field, const Vec3& c, float b, const Camera& camera);
+
 // Renders far fields with a headless GL context of its own, made on the constructing thread;
 // every call must come from that thread. Objects are drawn at level 0, decoded from the world
 // on demand and kept in the renderer's GPU cache.
