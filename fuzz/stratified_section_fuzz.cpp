@@ -1,5 +1,5 @@
 // libFuzzer target for the stratified sections' reader (StoredStratified; docs/format.md,
-// "Stratified sections"). The sections are real ones — the viewcells and near lists of a small
+// "`stratified` and `farfield`"). The sections are real ones — the viewcells and near lists of a small
 // generated city, with far faces of 8² texels made without GL (a pattern of the cell's far
 // objects) — edited by the input: its first byte picks the section (even: "stratified", odd:
 // "farfield") and, when it is 0 or 1, the rest of the input is that section itself; otherwise a

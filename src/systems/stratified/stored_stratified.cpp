@@ -1,5 +1,5 @@
 // Stratified thesis §3.1.2, §5.2.3 (digest 002 §4, "[ours] Proposal"): the stored near lists and
-// far faces. Layout: docs/format.md, "Stratified sections".
+// far faces. Layout: docs/format.md, "`stratified` and `farfield`".
 #include "cellwalk/systems/stratified/stored_stratified.hpp"
 
 #include <zstd.h>

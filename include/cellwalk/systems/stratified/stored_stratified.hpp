@@ -1,6 +1,6 @@
 // The stored stratified preprocessing of a world (seed 002 §3.1, §5.2.3; digest 002 §4): the
 // sizing, the k-d viewcells, every cell's near list (section "stratified") and every baked cell's
-// far faces (section "farfield"). Byte layout: docs/format.md, "Stratified sections".
+// far faces (section "farfield"). Byte layout: docs/format.md, "`stratified` and `farfield`".
 //
 // Far-face codec: zstd, lossless, per channel — colour RGBA8, ids (object id + 1) and depth
 // quantised to 16 bits as q = round(65535·(b/2)/d) (d >= b/2 for every far texel; 0 = none),
