@@ -29,6 +29,7 @@ class ProgressSink : public ObjectSink {
 
 SceneInfo generate(const GeneratedScene& scene, ObjectSink& sink) {
   if (const auto* city = std::get_if<CityParams>(&scene)) return generate_city(*city, sink);
+  if (const auto* city = std::get_if<StratifiedCityParams>(&scene)) return generate_stratified_city(*city, sink);
   return generate_plant(std::get<PlantParams>(scene), sink);
 }
 

@@ -13,7 +13,7 @@
 namespace cellwalk::bench {
 
 // The generator and its parameters.
-using GeneratedScene = std::variant<CityParams, PlantParams>;
+using GeneratedScene = std::variant<CityParams, PlantParams, StratifiedCityParams>;
 
 // How the world is built from the scene.
 struct WorldBuild {

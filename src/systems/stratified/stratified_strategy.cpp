@@ -132,7 +132,8 @@ struct StratifiedStrategy::Impl {
       fail_outside((" is in viewcell " + std::to_string(*c) +
                     ", which `cellwalk stratify build --along` left unbaked; rebuild with the path it walks or without --along").c_str(),
                    camera.position);
-    const double load_ms = !current || *current != *c ? enter(*c, stats) : 0.0;
+    crossed = !current || *current != *c;
+    const double load_ms = crossed ? enter(*c, stats) : 0.0;
     ++counters.frames;
     counters.near_objects += near.size();
     const Frustum frustum(camera);
@@ -156,6 +157,7 @@ struct StratifiedStrategy::Impl {
   uint64_t index_bytes = 0, field_bytes = 0;
   uint64_t peak = 0;  // resident bytes after each load (the store's own peak is taken at its gets)
   std::optional<CellId> current;
+  bool crossed = false;
   std::vector<ObjectId> near;
   CellFarField field;
   std::vector<FarFace> faces;
@@ -186,6 +188,14 @@ const Mesh* StratifiedStrategy::mesh(const DrawItem& item, FrameStats& stats) {
 }
 
 std::span<const FarFace> StratifiedStrategy::far_faces() const { return impl_->faces; }
+
+double StratifiedStrategy::far_angle(const Camera& camera) const {
+  if (!impl_->current) return 0.0;
+  const Vec3 centre = impl_->stored.partition().cell(*impl_->current).box.center();
+  return far_field_angle(impl_->field, centre, impl_->stored.params().b, camera);
+}
+
+bool StratifiedStrategy::crossed() const { return impl_->crossed; }
 
 uint64_t StratifiedStrategy::resident_bytes() const { return impl_->store.resident_bytes(); }
 

@@ -49,6 +49,11 @@ class StratifiedStrategy : public Strategy {
   uint64_t resident_bytes() const override;
   uint64_t peak_resident_bytes() const override;
   const StratifiedCounters& counters() const;
+  // The far field's angular error from `camera` (far_field_angle on the current cell's faces),
+  // radians; 0 before the first select() or in a show style without faces.
+  double far_angle(const Camera& camera) const;
+  // Whether the last select() entered another cell (and so loaded its far field).
+  bool crossed() const;
 
  private:
   struct Impl;

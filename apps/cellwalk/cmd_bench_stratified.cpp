@@ -1,0 +1,65 @@
+// cellwalk bench stratified: the stratified thesis's experiments (seed 002 §6) on its random
+// city (experiments/stratified/stratified_report.hpp).
+#include <cstdio>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "cellwalk/scene/path_generator.hpp"
+#include "checks.hpp"
+#include "commands.hpp"
+#include "experiments/stratified/stratified_report.hpp"
+
+namespace cellwalk::app {
+
+void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
+  auto* cmd = bench.add_subcommand(
+      "stratified", "Stratified rendering (seed 002): Table 6.1, frame times, fidelity and the far field's angle -> <out>/stratified.md");
+  struct Args {
+    StratifiedBenchParams params;
+    bool json = false;
+  };
+  auto args = std::make_shared<Args>();
+  StratifiedBenchParams& p = args->params;
+  cmd->add_option("--blocks-x", p.city.blocks_x, "City blocks along x (10: ~1 km)")->capture_default_str()->check(integer_in(1, 1000));
+  cmd->add_option("--blocks-z", p.city.blocks_z, "City blocks along z (13: ~1 km)")->capture_default_str()->check(integer_in(1, 1000));
+  cmd->add_option("--max-height", p.city.max_height, "Tallest building, metres")->capture_default_str()->check(number_in(1, 1000));
+  cmd->add_option("--city-seed", p.city.seed, "The city's seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
+  cmd->add_option("--alpha", p.alphas_deg, "The angular error bounds, degrees (Table 6.1: 7.5 and 1)")->capture_default_str()->check(number_in(0, 89, true));
+  cmd->add_option("--box", p.box, "Bounding box side b, metres")->capture_default_str()->check(number_in(0, 1e6, true));
+  cmd->add_option("--resolution", p.resolution, "Texels per face side")->capture_default_str()->check(integer_in(1, 4096));
+  cmd->add_option("--path", p.path_kind, "Path kind (normal, fast, ...)")->capture_default_str()->check([](const std::string& kind) {
+    try {
+      parse_session_kind(kind);
+      return std::string();
+    } catch (const std::exception& e) {
+      return std::string(e.what());
+    }
+  });
+  cmd->add_option("--frames", p.frames, "Frames of the path")->capture_default_str()->check(integer_in(2, 100000));
+  cmd->add_option("--path-seed", p.path_seed, "The path's seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
+  cmd->add_option("--along-margin", p.along_margin, "Cells within this of the path are baked (m)")->capture_default_str()->check(number_in(0, 1e5));
+  cmd->add_option("--width", p.width, "Image width")->capture_default_str()->check(integer_in(16, 4096));
+  cmd->add_option("--height", p.height, "Image height")->capture_default_str()->check(integer_in(16, 4096));
+  cmd->add_option("--fov", p.fov_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));
+  cmd->add_option("--fidelity-every", p.fidelity_every, "Compare every k-th frame with ground truth")->capture_default_str()->check(integer_in(1, 100000));
+  cmd->add_option("--images", p.images, "Frames whose images are written")->capture_default_str()->check(integer_in(0, 1000));
+  cmd->add_option("--out", p.out_dir, "Directory of the report (stratified.md and stratified/)")->capture_default_str();
+  cmd->add_option("--work-dir", p.work_dir, "Where the worlds go (default: a temporary directory)");
+  cmd->add_flag("--json", args->json, "Print the summary as JSON");
+  cmd->callback([args, command_line] {
+    args->params.command_line = command_line();
+    const nlohmann::ordered_json summary = run_stratified_bench(args->params);
+    if (args->json) {
+      std::printf("%s\n", summary.dump(2).c_str());
+      return;
+    }
+    for (const auto& [name, s] : summary.items())
+      if (s.contains("frame_ms"))
+        std::printf("%-18s %8.2f ms a frame (%.2f x brute), far angle max %.2f°\n", name.c_str(), s["frame_ms"].get<double>(),
+                    s["speedup"].get<double>(), s["max_far_angle_deg"].get<double>());
+    std::printf("wrote %s/stratified.md\n", args->params.out_dir.c_str());
+  });
+}
+
+}  // namespace cellwalk::app

@@ -1,0 +1,49 @@
+// `cellwalk bench stratified` (issue 17): the stratified thesis's experiments (seed 002 §6) on
+// its random city, measured rather than projected:
+//   table 6.1  per α: v (Eq. 2.2), b, the cells, those baked (the ones the path crosses, with a
+//              margin), preprocessing time per cell (near lists and far faces) and for every
+//              cell (projected from the measured rate), far-face storage (measured on the baked
+//              cells, per cell and for every cell);
+//   frames     brute force and `stratified` at each α walked along one path, interleaved frame
+//              by frame, each with its own renderer: frame time (Figs. 6-1, 6-2; and with the
+//              crossing loads taken out, Fig. 6-3's "ideal" curve), triangles, crossings, the
+//              frames that loaded a cell;
+//   fidelity   every k-th frame against ground truth: PSNR, differing pixels, missed objects,
+//              pixel error, and the far field's angular error measured from the baked depth
+//              against α on every frame; difference images (128 + test − truth, Figs. 6-4 to
+//              6-7) of a few frames.
+// Writes <out>/stratified.md and <out>/stratified/{table61,frames,summary}.csv, frame-times.svg
+// and the images.
+#pragma once
+
+#include <cstdint>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "cellwalk/scene/generators.hpp"
+
+namespace cellwalk {
+
+struct StratifiedBenchParams {
+  // The thesis's city: 1 km × 1 km × 67 m (§6; Appendix A's generator).
+  StratifiedCityParams city{.max_height = 67.0, .blocks_x = 10, .blocks_z = 13, .seed = 3};
+  std::vector<double> alphas_deg = {7.5, 1.0};  // Table 6.1's A and B
+  double box = 330.0;                           // b, metres (Table 6.1)
+  int resolution = 512;                         // texels per face side (§5.3)
+  std::string path_kind = "fast";
+  int frames = 300;                             // §6.1's path
+  uint64_t path_seed = 3;
+  float along_margin = 0.0f;  // cells within this of the path are baked
+  int width = 512, height = 512;
+  double fov_deg = 90.0;
+  int fidelity_every = 10;
+  int images = 4;             // frames whose truth, test and difference images are written
+  std::string out_dir = "docs/results";
+  std::string work_dir;       // empty = a temporary directory, removed at the end
+  std::string command_line;
+};
+
+nlohmann::ordered_json run_stratified_bench(const StratifiedBenchParams& params);
+
+}  // namespace cellwalk
