@@ -255,3 +255,48 @@ TEST(StratifiedWorld, AWorldWithoutThePreprocessingNamesTheCommand) {
 
 }  // namespace
 }  // namespace cellwalk
+
+// ---- cellwalk bench stratified -----------------------------------------------------------------
+
+#include "experiments/stratified/stratified_report.hpp"
+
+namespace cellwalk {
+namespace {
+
+// The whole bench at a tiny scale: the report and its files are written, and what must hold
+// whatever the machine holds: brute is its own baseline, stratified draws fewer triangles, its
+// far angle is positive and within the checker's worst case, and the smaller α has the smaller
+// cells and the smaller angle.
+TEST(StratifiedBench, WritesReportWithSaneFigures) {
+  const test::TempDir dir;
+  StratifiedBenchParams p;
+  p.city.blocks_x = p.city.blocks_z = 3;
+  p.alphas_deg = {10.0, 2.0};
+  p.box = 120.0;
+  p.resolution = 32;
+  p.frames = 30;
+  p.width = p.height = 64;
+  p.fidelity_every = 10;
+  p.images = 1;
+  p.out_dir = dir.file("results");
+  p.work_dir = dir.file("work");
+  p.command_line = "cellwalk bench stratified --blocks-x 3";
+  const nlohmann::ordered_json s = run_stratified_bench(p);
+  const std::filesystem::path out = p.out_dir;
+  const std::vector<uint8_t> bytes = test::slurp((out / "stratified.md").string());
+  const std::string md(bytes.begin(), bytes.end());
+  for (const char* heading : {"## Table 6.1", "## Frame time", "## Fidelity"}) EXPECT_NE(md.find(heading), std::string::npos) << heading;
+  EXPECT_NE(md.find(p.command_line), std::string::npos);
+  for (const char* file : {"table61.csv", "frames.csv", "frame-times.svg"})
+    EXPECT_GT(std::filesystem::file_size(out / "stratified" / file), 0u) << file;
+  EXPECT_DOUBLE_EQ(s["brute"]["speedup"].get<double>(), 1.0);
+  const double coarse = s["stratified-10.0"]["max_far_angle_deg"].get<double>();
+  const double fine = s["stratified-2.0"]["max_far_angle_deg"].get<double>();
+  EXPECT_GT(coarse, 0.0);
+  EXPECT_LT(fine, coarse);
+  EXPECT_LT(coarse, 10.0 * 1.1 + 90.0 / 32);  // the checker's few per cent and half a texel
+  EXPECT_LT(fine, 2.0 * 1.1 + 90.0 / 32);
+}
+
+}  // namespace
+}  // namespace cellwalk
