@@ -235,9 +235,39 @@ TEST_F(StratifiedSystem, BudgetHoldsTheFacesOrTheRunIsRefused) {
       Error);
 }
 
+TEST_F(StratifiedSystem, PrefetchHasTheNextCellReadyAtTheCrossing) {
+  RenderSettings settings;
+  settings.width = settings.height = 64;
+  Renderer renderer(settings);
+  const CameraPath path = city_path(world_file_, *dir_);
+  StratifiedCounters counted[2];
+  std::vector<Image> images[2];
+  for (const int prefetch : {0, 1}) {
+    const std::unique_ptr<Strategy> s =
+        make_strategy(prefetch ? "stratified" : "stratified:prefetch=0", *world_, StrategyOptions{});
+    Camera camera;
+    uint64_t stall_frames = 0;
+    for (const PathFrame& f : path.frames) {
+      apply(f, camera);
+      stall_frames += render_frame(*s, renderer, camera, f.time).stall;
+      images[prefetch].push_back(renderer.read_color());
+    }
+    counted[prefetch] = dynamic_cast<StratifiedStrategy&>(*s).counters();
+    EXPECT_EQ(stall_frames, counted[prefetch].stalls);
+  }
+  ASSERT_GT(counted[0].crossings, 1u) << "the path must cross cells";
+  EXPECT_EQ(counted[0].stalls, counted[0].crossings);  // the thesis: every crossing loads in its frame
+  EXPECT_EQ(counted[1].crossings, counted[0].crossings);
+  EXPECT_LT(counted[1].stalls, counted[0].stalls);
+  EXPECT_GT(counted[1].prefetch_hits, 0u);
+  for (size_t i = 0; i < images[0].size(); ++i) EXPECT_EQ(images[0][i].rgba, images[1][i].rgba) << "frame " << i;
+}
+
 TEST(StratifiedName, SettingsAreParsedAndBadOnesRefused) {
   EXPECT_EQ(parse_stratified_strategy_name("stratified:show=far-texture").show, StratifiedConfig::Show::kFarTexture);
   EXPECT_FALSE(parse_stratified_strategy_name("stratified:cull=0").cull);
+  EXPECT_FALSE(parse_stratified_strategy_name("stratified:prefetch=0,lookahead=3").prefetch);
+  EXPECT_DOUBLE_EQ(parse_stratified_strategy_name("stratified:lookahead=3").lookahead_s, 3.0);
   EXPECT_THROW(parse_stratified_strategy_name("stratified:show=nothing"), Error);
   EXPECT_THROW(parse_stratified_strategy_name("stratified:speed=2"), Error);
 }

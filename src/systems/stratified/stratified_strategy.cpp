@@ -1,12 +1,19 @@
 // Stratified thesis §3.2 (walkthrough mode), §5.1 (show styles), §5.2.2–§5.2.3 (ModelMgr and
 // BoxMgr at run time); digest 002 §3.7. The cell is looked up by k-d descent; on a crossing
-// its near list and far faces are read and decoded (the thesis's BoxMgr load; done in the frame
-// that crosses, so its cost shows in that frame's I/O time, as the thesis's spikes did).
+// its near list and far faces are read and decoded (the thesis's BoxMgr load). Without prefetch
+// that happens in the frame that crosses, so its cost shows in that frame, as the thesis's
+// spikes did; with it (the thesis's future work, §7: velocity-based prefetching) a thread loads
+// the cells the viewer is heading for, and a crossing that finds its cell loaded costs nothing.
 #include "cellwalk/systems/stratified/stratified_strategy.hpp"
 
 #include <algorithm>
+#include <condition_variable>
 #include <cstdio>
+#include <deque>
+#include <map>
+#include <mutex>
 #include <optional>
+#include <thread>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/store/geometry_store.hpp"
@@ -52,12 +59,139 @@ StratifiedConfig parse_stratified_strategy_name(const std::string& name) {
         if (s.value == kShowNames[i]) c.show = StratifiedConfig::Show(i);
     } else if (s.key == "cull") {
       c.cull = s.number(0, 1) != 0;
+    } else if (s.key == "prefetch") {
+      c.prefetch = s.number(0, 1) != 0;
+    } else if (s.key == "lookahead") {
+      c.lookahead_s = s.number(0, 60);
     } else {
-      s.unknown("show, cull");
+      s.unknown("show, cull, prefetch, lookahead");
     }
   });
   return c;
 }
+
+namespace {
+
+// A cell's run-time data: its near list and far field, and the bytes of the budget they hold.
+struct CellData {
+  std::vector<ObjectId> near;
+  CellFarField field;
+  uint64_t bytes = 0;
+};
+
+CellData load_cell(const StoredStratified& stored, CellId c, bool faces) {
+  CellData d;
+  d.near = stored.near(c);
+  if (faces) d.field = stored.far_field(c);
+  d.bytes = bytes_of(d.field) + d.near.capacity() * sizeof(ObjectId);
+  return d;
+}
+
+// Loads requested cells on a thread of its own, each charged to `budget` (try_reserve: a cell
+// that does not fit is dropped, never waited for). At most kSlots cells are queued or ready.
+// Thread-safety: every method may be called from the owning thread while the loader runs.
+class CellLoader {
+ public:
+  static constexpr size_t kSlots = 3;
+
+  CellLoader(const StoredStratified& stored, bool faces, MemoryBudget& budget)
+      : stored_(stored), faces_(faces), budget_(budget), thread_([this] { run(); }) {}
+  ~CellLoader() {
+    {
+      std::lock_guard lock(mutex_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    thread_.join();
+    for (auto& [cell, data] : ready_) budget_.release(data.bytes);
+  }
+
+  // Queues `c` unless it is queued, loading or ready, or every slot is taken.
+  void request(CellId c) {
+    std::lock_guard lock(mutex_);
+    if (known(c) || queue_.size() + ready_.size() + (loading_ ? 1 : 0) >= kSlots) return;
+    queue_.push_back(c);
+    wake_.notify_all();
+  }
+
+  // `c`'s data if it is ready; if it is queued or loading, waits for it. nullopt otherwise (or
+  // when it did not fit the budget). The bytes it holds pass to the caller.
+  std::optional<CellData> take(CellId c) {
+    std::unique_lock lock(mutex_);
+    done_.wait(lock, [&] { return !(loading_ == c || std::find(queue_.begin(), queue_.end(), c) != queue_.end()); });
+    const auto it = ready_.find(c);
+    if (it == ready_.end()) return std::nullopt;
+    CellData d = std::move(it->second);
+    ready_.erase(it);
+    return d;
+  }
+
+  // Drops queued and ready cells that are not in `wanted` (the viewer turned away).
+  void keep_only(const std::vector<CellId>& wanted) {
+    std::lock_guard lock(mutex_);
+    auto unwanted = [&](CellId c) { return std::find(wanted.begin(), wanted.end(), c) == wanted.end(); };
+    std::erase_if(queue_, unwanted);
+    for (auto it = ready_.begin(); it != ready_.end();) {
+      if (!unwanted(it->first)) {
+        ++it;
+        continue;
+      }
+      budget_.release(it->second.bytes);
+      it = ready_.erase(it);
+    }
+  }
+
+  uint64_t loaded() const {
+    std::lock_guard lock(mutex_);
+    return loaded_;
+  }
+
+ private:
+  // REQUIRES: mutex_ held.
+  bool known(CellId c) const {
+    return loading_ == c || ready_.count(c) || std::find(queue_.begin(), queue_.end(), c) != queue_.end();
+  }
+
+  void run() {
+    std::unique_lock lock(mutex_);
+    while (true) {
+      wake_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+      const CellId c = queue_.front();
+      queue_.pop_front();
+      loading_ = c;
+      lock.unlock();
+      std::optional<CellData> d;
+      try {
+        d = load_cell(stored_, c, faces_);
+        if (!budget_.try_reserve(d->bytes)) d.reset();
+      } catch (const Error&) {
+        d.reset();  // the crossing loads it itself and reports the damage
+      }
+      lock.lock();
+      loading_.reset();
+      if (d) {
+        ready_.emplace(c, std::move(*d));
+        ++loaded_;
+      }
+      done_.notify_all();
+    }
+  }
+
+  const StoredStratified& stored_;
+  bool faces_;
+  MemoryBudget& budget_;
+  mutable std::mutex mutex_;
+  std::condition_variable wake_, done_;
+  std::deque<CellId> queue_;
+  std::optional<CellId> loading_;
+  std::map<CellId, CellData> ready_;
+  uint64_t loaded_ = 0;
+  bool stop_ = false;
+  std::thread thread_;  // last: started once everything it uses exists
+};
+
+}  // namespace
 
 struct StratifiedStrategy::Impl {
   Impl(const World& w, const StratifiedConfig& c, const StrategyOptions& o)
@@ -66,42 +200,52 @@ struct StratifiedStrategy::Impl {
     if (!store.buffer().budget().try_reserve(index_bytes))
       fail("stratified", "the memory budget cannot hold the stored cells and near lists (" + std::to_string(index_bytes) +
                              " bytes) beside the geometry store; raise --budget");
+    if (config.prefetch) loader = std::make_unique<CellLoader>(stored, uses_faces(), store.buffer().budget());
   }
-  ~Impl() { store.buffer().budget().release(index_bytes + field_bytes); }
+  ~Impl() {
+    loader.reset();
+    store.buffer().budget().release(index_bytes + cell.bytes);
+  }
 
   bool uses_faces() const {
     return config.show == StratifiedConfig::Show::kFull || config.show == StratifiedConfig::Show::kFarTexture;
   }
 
-  // Loads cell `c`'s near list and, when they are drawn, its far faces, charging the decoded
-  // faces to the budget (the previous cell's are released first).
-  // Returns the milliseconds the load took.
+  // Makes `c` the current cell: its data from the loader, or loaded here (a stall after the
+  // first frame). The previous cell's bytes are released first. Returns the milliseconds it
+  // took in this frame.
   double enter(CellId c, FrameStats& stats) {
     Stopwatch watch;
-    near = stored.near(c);
     faces.clear();
-    field = {};
-    store.buffer().budget().release(field_bytes);
-    field_bytes = 0;
-    if (uses_faces()) {
-      const uint64_t record = stored.far_field_bytes(c);
-      field = stored.far_field(c);
-      field_bytes = bytes_of(field);
-      if (!store.buffer().reserve(field_bytes))
-        fail("stratified", "the memory budget cannot hold cell " + std::to_string(c) + "'s far faces (" +
-                               std::to_string(field_bytes) + " bytes) beside the cells; raise --budget");
+    store.buffer().budget().release(cell.bytes);
+    cell = {};
+    std::optional<CellData> ready = loader ? loader->take(c) : std::nullopt;
+    const bool first = !current.has_value();
+    if (ready) {
+      cell = std::move(*ready);
+      ++counters.prefetch_hits;
+    } else {
+      cell = load_cell(stored, c, uses_faces());
+      if (!store.buffer().reserve(cell.bytes))
+        fail("stratified", "the memory budget cannot hold cell " + std::to_string(c) + "'s near list and far faces (" +
+                               std::to_string(cell.bytes) + " bytes) beside the cells; raise --budget");
+      const uint64_t record = uses_faces() ? stored.far_field_bytes(c) : 0;
       stats.bytes_read += record;
       counters.loaded_bytes += record;
-      const Vec3 centre = stored.partition().cell(c).box.center();
-      for (const FaceImage& f : field.faces) {
-        FarFace quad = face_quad(centre, stored.params().b, f.face, c * kFaceCount + uint32_t(f.face));
-        quad.color = &f.color;
-        quad.ids = &f.ids;
-        faces.push_back(quad);
+      if (!first) {
+        ++counters.stalls;
+        stats.stall = true;
       }
     }
+    const Vec3 centre = stored.partition().cell(c).box.center();
+    for (const FaceImage& f : cell.field.faces) {
+      FarFace quad = face_quad(centre, stored.params().b, f.face, c * kFaceCount + uint32_t(f.face));
+      quad.color = &f.color;
+      quad.ids = &f.ids;
+      faces.push_back(quad);
+    }
     current = c;
-    ++counters.crossings;
+    counters.crossings += first ? 0 : 1;
     const double ms = watch.ms();
     counters.load_ms += ms;
     stats.io_ms += ms;
@@ -109,8 +253,31 @@ struct StratifiedStrategy::Impl {
     return ms;
   }
 
+  // Asks the loader for the cells the viewer reaches within the lookahead at its present
+  // velocity (from the last frame's position and path time).
+  void prefetch(const Camera& camera, double time) {
+    if (!loader) return;
+    std::vector<CellId> wanted;
+    if (last_time && time > *last_time) {
+      const Vec3 velocity = (camera.position - last_position) / float(time - *last_time);
+      for (int k = 1; k <= 6; ++k) {
+        const std::optional<CellId> c =
+            stored.partition().locate(camera.position + velocity * float(config.lookahead_s * k / 6.0));
+        if (c && c != current && stored.partition().cell(*c).computed() &&
+            std::find(wanted.begin(), wanted.end(), *c) == wanted.end())
+          wanted.push_back(*c);
+      }
+    }
+    loader->keep_only(wanted);
+    for (const CellId c : wanted) loader->request(c);
+    last_position = camera.position;
+    last_time = time;
+    counters.prefetched = loader->loaded();
+  }
+
   // Whether object `id` is drawn as polygons in this show style.
   bool drawn_as_polygon(ObjectId id, size_t& next_near) const {
+    const std::vector<ObjectId>& near = cell.near;
     while (next_near < near.size() && near[next_near] < id) ++next_near;
     const bool is_near = next_near < near.size() && near[next_near] == id;
     switch (config.show) {
@@ -134,8 +301,9 @@ struct StratifiedStrategy::Impl {
                    camera.position);
     crossed = !current || *current != *c;
     const double load_ms = crossed ? enter(*c, stats) : 0.0;
+    prefetch(camera, stats.time);
     ++counters.frames;
-    counters.near_objects += near.size();
+    counters.near_objects += cell.near.size();
     const Frustum frustum(camera);
     size_t next_near = 0;
     const bool all = config.show == StratifiedConfig::Show::kBrute || config.show == StratifiedConfig::Show::kFarObjects;
@@ -144,7 +312,7 @@ struct StratifiedStrategy::Impl {
         if (drawn_as_polygon(id, next_near) && (!config.cull || frustum.intersects(world.object(id).bounds)))
           items.push_back({id, 0, world.object(id).color});
     } else if (config.show != StratifiedConfig::Show::kFarTexture) {
-      for (const ObjectId id : near)
+      for (const ObjectId id : cell.near)
         if (!config.cull || frustum.intersects(world.object(id).bounds)) items.push_back({id, 0, world.object(id).color});
     }
     stats.query_ms += watch.ms() - load_ms;
@@ -154,15 +322,17 @@ struct StratifiedStrategy::Impl {
   StratifiedConfig config;
   StoredStratified stored;
   GeometryStore store;
-  uint64_t index_bytes = 0, field_bytes = 0;
+  uint64_t index_bytes = 0;
   uint64_t peak = 0;  // resident bytes after each load (the store's own peak is taken at its gets)
   std::optional<CellId> current;
   bool crossed = false;
-  std::vector<ObjectId> near;
-  CellFarField field;
+  CellData cell;  // the current cell's
   std::vector<FarFace> faces;
   std::shared_ptr<const Mesh> mesh;  // handed to the renderer for upload
   StratifiedCounters counters;
+  Vec3 last_position{0.0f};
+  std::optional<double> last_time;
+  std::unique_ptr<CellLoader> loader;  // last: destroyed first, while what it uses still exists
 };
 
 StratifiedStrategy::StratifiedStrategy(const World& world, const StratifiedConfig& config, const StrategyOptions& options)
@@ -173,7 +343,9 @@ StratifiedStrategy::~StratifiedStrategy() = default;
 std::string StratifiedStrategy::name() const {
   std::string name = "stratified";
   if (impl_->config.show != StratifiedConfig::Show::kFull) name += std::string(":show=") + kShowNames[int(impl_->config.show)];
-  if (!impl_->config.cull) name += name.find(':') == std::string::npos ? ":cull=0" : ",cull=0";
+  auto add = [&](const std::string& setting) { name += (name.find(':') == std::string::npos ? ":" : ",") + setting; };
+  if (!impl_->config.cull) add("cull=0");
+  if (!impl_->config.prefetch) add("prefetch=0");
   return name;
 }
 
@@ -192,7 +364,7 @@ std::span<const FarFace> StratifiedStrategy::far_faces() const { return impl_->f
 double StratifiedStrategy::far_angle(const Camera& camera) const {
   if (!impl_->current) return 0.0;
   const Vec3 centre = impl_->stored.partition().cell(*impl_->current).box.center();
-  return far_field_angle(impl_->field, centre, impl_->stored.params().b, camera);
+  return far_field_angle(impl_->cell.field, centre, impl_->stored.params().b, camera);
 }
 
 bool StratifiedStrategy::crossed() const { return impl_->crossed; }

@@ -18,10 +18,16 @@ namespace cellwalk {
 //                     (near objects only), far-objects (the far objects as polygons, nothing
 //                     near), far-texture (the far faces only), brute (every object)
 //   cull=1            frustum-cull the objects drawn as polygons (0: draw them all)
+//   prefetch=1        load the cells the viewer is heading for on a thread of their own, from its
+//                     velocity (the thesis's future work, §7), so a crossing finds them ready
+//                     (0: every crossing loads in its frame, as the thesis's did)
+//   lookahead=1.5     seconds of motion ahead whose cells are prefetched
 struct StratifiedConfig {
   enum class Show { kFull, kNear, kFarObjects, kFarTexture, kBrute };
   Show show = Show::kFull;
   bool cull = true;
+  bool prefetch = true;
+  double lookahead_s = 1.5;
 };
 bool is_stratified_strategy_name(const std::string& name);
 StratifiedConfig parse_stratified_strategy_name(const std::string& name);
@@ -33,6 +39,9 @@ struct StratifiedCounters {
   uint64_t loaded_bytes = 0;    // far-field records read
   double load_ms = 0.0;         // reading and decoding them
   uint64_t near_objects = 0;    // Σ over frames of the current cell's near list
+  uint64_t prefetched = 0;      // cells loaded ahead by the prefetcher
+  uint64_t prefetch_hits = 0;   // crossings that found their cell loaded
+  uint64_t stalls = 0;          // crossings (after the first frame) that had to load or wait
 };
 
 class StratifiedStrategy : public Strategy {
