@@ -311,17 +311,21 @@ TEST(StratifiedBench, WritesReportWithSaneFigures) {
   p.out_dir = dir.file("results");
   p.work_dir = dir.file("work");
   p.command_line = "cellwalk bench stratified --blocks-x 3";
+  p.path_seeds = {3};
   const nlohmann::ordered_json s = run_stratified_bench(p);
   const std::filesystem::path out = p.out_dir;
   const std::vector<uint8_t> bytes = test::slurp((out / "stratified.md").string());
   const std::string md(bytes.begin(), bytes.end());
   for (const char* heading : {"## Table 6.1", "## Frame time", "## Fidelity"}) EXPECT_NE(md.find(heading), std::string::npos) << heading;
   EXPECT_NE(md.find(p.command_line), std::string::npos);
-  for (const char* file : {"table61.csv", "frames.csv", "frame-times.svg"})
+  for (const char* file : {"table61.csv", "frames.csv", "frame-times-seed3.svg"})
     EXPECT_GT(std::filesystem::file_size(out / "stratified" / file), 0u) << file;
-  EXPECT_DOUBLE_EQ(s["brute"]["speedup"].get<double>(), 1.0);
-  const double coarse = s["stratified-10.0"]["max_far_angle_deg"].get<double>();
-  const double fine = s["stratified-2.0"]["max_far_angle_deg"].get<double>();
+  const auto& walks = s["paths"]["3"];
+  EXPECT_DOUBLE_EQ(walks["brute"]["speedup"].get<double>(), 1.0);
+  EXPECT_LT(walks["stratified-10.0"]["triangles"].get<uint64_t>(), walks["brute"]["triangles"].get<uint64_t>() + 8);
+  EXPECT_EQ(walks["stratified-10.0-noprefetch"]["stall_frames"], walks["stratified-10.0-noprefetch"]["crossings"]);
+  const double coarse = walks["stratified-10.0"]["max_far_angle_deg"].get<double>();
+  const double fine = walks["stratified-2.0"]["max_far_angle_deg"].get<double>();
   EXPECT_GT(coarse, 0.0);
   EXPECT_LT(fine, coarse);
   EXPECT_LT(coarse, 10.0 * 1.1 + 90.0 / 32);  // the checker's few per cent and half a texel

@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/path_generator.hpp"
 
 namespace cellwalk::app {
 
@@ -65,6 +66,19 @@ CLI::Validator integer_in(int64_t lo, int64_t hi) {
 }
 
 CLI::Validator thread_count() { return integer_in(0, kMaxThreads).description("0 (all cores) to " + std::to_string(kMaxThreads)); }
+
+CLI::Validator session_kind_check() {
+  return CLI::Validator(
+      [](std::string& kind) -> std::string {
+        try {
+          parse_session_kind(kind);
+          return {};
+        } catch (const Error& e) {
+          return e.what();
+        }
+      },
+      "a path kind");
+}
 
 CLI::Validator page_size_check() {
   return CLI::Validator(

@@ -27,6 +27,8 @@ CLI::Validator integer_in(int64_t lo, int64_t hi);
 CLI::Validator thread_count();
 // --page-size: a power of two from 512 bytes to 1 MiB, what a world file allows.
 CLI::Validator page_size_check();
+// A path kind parse_session_kind knows (normal, slow, fast, ...).
+CLI::Validator session_kind_check();
 
 // Fails, naming both paths, when an output is one of the inputs (also through symlinks, hard
 // links and "./" spellings) or two outputs are the same file: writing would destroy the input.

@@ -5,7 +5,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/scene/path_generator.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/stratified/stratified_report.hpp"
@@ -28,16 +27,9 @@ void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--alpha", p.alphas_deg, "The angular error bounds, degrees (Table 6.1: 7.5 and 1)")->capture_default_str()->check(number_in(0, 89, true));
   cmd->add_option("--box", p.box, "Bounding box side b, metres")->capture_default_str()->check(number_in(0, 1e6, true));
   cmd->add_option("--resolution", p.resolution, "Texels per face side")->capture_default_str()->check(integer_in(1, 4096));
-  cmd->add_option("--path", p.path_kind, "Path kind (normal, fast, ...)")->capture_default_str()->check([](const std::string& kind) {
-    try {
-      parse_session_kind(kind);
-      return std::string();
-    } catch (const std::exception& e) {
-      return std::string(e.what());
-    }
-  });
+  cmd->add_option("--path", p.path_kind, "Path kind (normal, fast, ...)")->capture_default_str()->check(session_kind_check());
   cmd->add_option("--frames", p.frames, "Frames of the path")->capture_default_str()->check(integer_in(2, 100000));
-  cmd->add_option("--path-seed", p.path_seed, "The path's seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
+  cmd->add_option("--path-seed", p.path_seeds, "The paths' seeds, one path each")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--along-margin", p.along_margin, "Cells within this of the path are baked (m)")->capture_default_str()->check(number_in(0, 1e5));
   cmd->add_option("--width", p.width, "Image width")->capture_default_str()->check(integer_in(16, 4096));
   cmd->add_option("--height", p.height, "Image height")->capture_default_str()->check(integer_in(16, 4096));
@@ -54,10 +46,11 @@ void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
       std::printf("%s\n", summary.dump(2).c_str());
       return;
     }
-    for (const auto& [name, s] : summary.items())
-      if (s.contains("frame_ms"))
-        std::printf("%-18s %8.2f ms a frame (%.2f x brute), far angle max %.2f°\n", name.c_str(), s["frame_ms"].get<double>(),
-                    s["speedup"].get<double>(), s["max_far_angle_deg"].get<double>());
+    for (const auto& [seed, walks] : summary["paths"].items())
+      for (const auto& [name, s] : walks.items())
+        std::printf("path %-4s %-28s %8.2f ms a frame (%.2f x brute), %llu stall frames, far angle max %.2f°\n", seed.c_str(),
+                    name.c_str(), s["frame_ms"].get<double>(), s["speedup"].get<double>(),
+                    (unsigned long long)s["stall_frames"].get<uint64_t>(), s["max_far_angle_deg"].get<double>());
     std::printf("wrote %s/stratified.md\n", args->params.out_dir.c_str());
   });
 }

@@ -5,7 +5,6 @@
 
 #include <nlohmann/json.hpp>
 
-#include "cellwalk/scene/path_generator.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/vlod/vlod_report.hpp"
@@ -25,14 +24,7 @@ void register_bench_vlod(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--plant-units", p.plant_units, "Units per side of the walked plant (4: ~10^6 triangles)")->capture_default_str()->check(number_in(1, 64));
   cmd->add_option("--plant-detail", p.plant_detail, "Tessellation of the plant")->capture_default_str()->check(number_in(0.25, 16));
   cmd->add_option("--scale-objects", p.scale_objects, "Objects of the scale table's cities (5600: ~10^7 triangles, 56000: ~10^8)")->capture_default_str()->check(number_in(50, 1e7));
-  cmd->add_option("--paths", p.path_kinds, "Path kinds walked (normal, fast, slow, turning, ...)")->capture_default_str()->check([](const std::string& kind) {
-    try {
-      parse_session_kind(kind);
-      return std::string();
-    } catch (const std::exception& e) {
-      return std::string(e.what());
-    }
-  });
+  cmd->add_option("--paths", p.path_kinds, "Path kinds walked (normal, fast, slow, turning, ...)")->capture_default_str()->check(session_kind_check());
   cmd->add_option("--frames", p.frames, "Frames per path")->capture_default_str()->check(integer_in(2, 100000));
   cmd->add_option("--cell-size", p.cell_size, "View cell side at eye height (m)")->capture_default_str()->check(number_in(1, 10000));
   cmd->add_option("--along-margin", p.along_margin, "Cells within this of a path are computed (m)")->capture_default_str()->check(number_in(0, 10000));

@@ -111,7 +111,7 @@ Walker make_walker(const std::string& label, const std::string& file, const std:
 // Walks every walker along the path, frame by frame in rotating order, and every k-th frame
 // compares each with one ground-truth rendering.
 void walk_interleaved(std::vector<Walker>& walkers, Walker& truth, const CameraPath& path, const Camera& lens,
-                      const StratifiedBenchParams& p, const fs::path& images) {
+                      const StratifiedBenchParams& p, const fs::path& images, const std::string& prefix) {
   Camera camera = lens;
   Progress progress("bench stratified: walk", path.frames.size());
   int written = 0;
@@ -126,7 +126,7 @@ void walk_interleaved(std::vector<Walker>& walkers, Walker& truth, const CameraP
       truth_ids = truth.renderer->read_ids();
     }
     const bool write = compare && written < p.images && i > 0;
-    if (write) write_png(truth_color, (images / ("frame" + std::to_string(i) + "-truth.png")).string());
+    if (write) write_png(truth_color, (images / (prefix + "frame" + std::to_string(i) + "-truth.png")).string());
     for (size_t k = 0; k < walkers.size(); ++k) {
       Walker& w = walkers[(i + k) % walkers.size()];
       FrameStats stats = render_frame(*w.strategy, *w.renderer, camera, path.frames[i].time);
@@ -141,8 +141,8 @@ void walk_interleaved(std::vector<Walker>& walkers, Walker& truth, const CameraP
       f.frame = int(i);
       w.fidelity.push_back(std::move(f));
       if (write && w.stratified) {
-        write_png(color, (images / ("frame" + std::to_string(i) + "-" + w.label + ".png")).string());
-        write_png(diff, (images / ("frame" + std::to_string(i) + "-" + w.label + "-diff.png")).string());
+        write_png(color, (images / (prefix + "frame" + std::to_string(i) + "-" + w.label + ".png")).string());
+        write_png(diff, (images / (prefix + "frame" + std::to_string(i) + "-" + w.label + "-diff.png")).string());
       }
     }
     written += write;
@@ -203,17 +203,17 @@ const std::vector<std::string> kTable61Header = {
     "α", "v (m)", "cells", "baked", "bake ms / cell", "all cells, min (from the rate)", "near lists, s (all cells)",
     "stored KiB / cell", "all cells, MiB", "raw / stored", "thesis: v; preprocessing; storage"};
 
-const std::vector<std::string> kFramesHeader = {"strategy", "frame ms mean", "sd", "p95", "max", "speed-up vs brute",
+const std::vector<std::string> kFramesHeader = {"path seed", "strategy", "frame ms mean", "sd", "p95", "max", "speed-up vs brute",
                                                 "ideal ms (loads out, Fig. 6-3)", "triangles / frame", "crossings",
                                                 "stall frames (loaded a cell)", "largest crossing ms"};
 
 const std::vector<std::string> kFidelityHeader = {
-    "strategy", "frames compared", "PSNR dB", "differing pixels mean %", "max %", "missed of visible", "pixel error max px",
+    "path seed", "strategy", "frames compared", "PSNR dB", "differing pixels mean %", "max %", "missed of visible", "pixel error max px",
     "far angle max (measured)", "α", "frames over α"};
 
-std::string frame_times_svg(const std::vector<Walker>& walkers) {
+std::string frame_times_svg(const std::vector<Walker>& walkers, const std::string& path_name) {
   LinePlot plot;
-  plot.title = "Frame time along the path (Figs. 6-1, 6-2)";
+  plot.title = "Frame time along " + path_name + " (Figs. 6-1, 6-2)";
   plot.x_label = "frame";
   plot.y_label = "ms";
   for (const Walker& w : walkers) {
@@ -236,63 +236,73 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
   build.progress_label = "bench stratified: build";
   const BuildReport built = bench::make_bench_world(p.city, build, dir.file("city.cwscene"), world_file);
   const World world(world_file);
-  PathParams path_params;
-  path_params.kind = parse_session_kind(p.path_kind);
-  path_params.frames = p.frames;
-  path_params.seed = p.path_seed;
-  const CameraPath path = generate_path(world.info().nav, path_params);
+  std::vector<std::pair<uint64_t, CameraPath>> paths;
+  CameraPath every_path;  // the cells along any path are baked
+  for (const uint64_t seed : p.path_seeds) {
+    PathParams path_params;
+    path_params.kind = parse_session_kind(p.path_kind);
+    path_params.frames = p.frames;
+    path_params.seed = seed;
+    paths.emplace_back(seed, generate_path(world.info().nav, path_params));
+    every_path.frames.insert(every_path.frames.end(), paths.back().second.frames.begin(), paths.back().second.frames.end());
+  }
 
   std::vector<Config> configs;
   for (const double a : p.alphas_deg)
-    configs.push_back(preprocess(p, world, path, a, dir.file("city-alpha" + fixed(a, 1) + ".cww")));
+    configs.push_back(preprocess(p, world, every_path, a, dir.file("city-alpha" + fixed(a, 1) + ".cww")));
 
   const std::unique_ptr<GlContext> context = GlContext::headless();
-  std::vector<Walker> walkers;
-  walkers.push_back(make_walker("brute", world_file, "brute", p, 0.0));
-  for (const Config& c : configs)
-    walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1), c.file, "stratified", p, rad(c.alpha_deg)));
-  // The thesis's own run time: every crossing loads in its frame.
-  for (const Config& c : configs)
-    walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1) + "-noprefetch", c.file, "stratified:prefetch=0", p,
-                                  rad(c.alpha_deg)));
-  Walker truth = make_walker("truth", world_file, "ground-truth", p, 0.0);
   Camera lens;
   lens.fov_y_deg = float(p.fov_deg);
   lens.aspect = float(p.width) / float(p.height);
   const fs::path out = fs::path(p.out_dir), sub = out / "stratified";
   fs::create_directories(sub);
-  walk_interleaved(walkers, truth, path, lens, p, sub);
-
   Table frames_rows, fidelity_rows, per_frame;
-  const double brute_ms = summarize_frames(walkers.front()).mean;
-  Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}}};
-  for (const Walker& w : walkers) {
-    const FrameSummary s = summarize_frames(w);
-    frames_rows.push_back({w.label, fixed(s.mean, 2), fixed(s.sd, 2), fixed(s.p95, 2), fixed(s.max, 2),
-                           fixed(s.mean > 0 ? brute_ms / s.mean : 0.0, 2) + "×", fixed(s.ideal_mean, 2),
-                           std::to_string(s.triangles), std::to_string(s.crossings), std::to_string(s.loads),
-                           fixed(s.max_load, 1)});
-    const FidelitySummary f = summarize(w.fidelity);
-    const double worst = w.angles.empty() ? 0.0 : *std::max_element(w.angles.begin(), w.angles.end());
-    const auto over = std::count_if(w.angles.begin(), w.angles.end(), [&](double a) { return w.stratified && a > w.alpha; });
-    fidelity_rows.push_back({w.label, std::to_string(f.frames), std::isfinite(f.mean_psnr_db) ? fixed(f.mean_psnr_db, 1) : "inf",
-                             fixed(100 * f.mean_differing_fraction, 3), fixed(100 * f.max_differing_fraction, 3),
-                             std::to_string(f.missed_objects) + " of " + std::to_string(f.visible_objects),
-                             fixed(f.max_pixel_error_px, 1), w.stratified ? fixed(deg(worst), 2) + "°" : "—",
-                             w.stratified ? fixed(deg(w.alpha), 1) + "°" : "—", w.stratified ? std::to_string(over) : "—"});
-    summary[w.label] = {{"frame_ms", s.mean}, {"speedup", s.mean > 0 ? brute_ms / s.mean : 0.0}, {"crossings", s.crossings},
-                        {"max_far_angle_deg", deg(worst)}, {"frames_over_alpha", over}, {"psnr_db", std::isfinite(f.mean_psnr_db) ? Json(f.mean_psnr_db) : Json(nullptr)},
-                        {"missed", f.missed_objects}, {"visible", f.visible_objects}};
-    for (size_t i = 0; i < w.frames.size(); ++i)
-      per_frame.push_back({w.label, std::to_string(w.frames[i].frame), fixed(w.frames[i].frame_ms, 3),
-                           std::to_string(w.frames[i].triangles), w.crossings[i] ? "1" : "0",
-                           fixed(w.frames[i].io_ms + w.frames[i].decode_ms, 3), fixed(deg(w.angles[i]), 4)});
+  Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}}, {"paths", Json::object()}};
+  for (const auto& [seed, path] : paths) {
+    const std::string path_name = p.path_kind + " path, seed " + std::to_string(seed);
+    std::vector<Walker> walkers;
+    walkers.push_back(make_walker("brute", world_file, "brute", p, 0.0));
+    for (const Config& c : configs)
+      walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1), c.file, "stratified", p, rad(c.alpha_deg)));
+    // The thesis's own run time: every crossing loads in its frame.
+    for (const Config& c : configs)
+      walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1) + "-noprefetch", c.file, "stratified:prefetch=0", p,
+                                    rad(c.alpha_deg)));
+    Walker truth = make_walker("truth", world_file, "ground-truth", p, 0.0);
+    walk_interleaved(walkers, truth, path, lens, p, sub, "seed" + std::to_string(seed) + "-");
+    const double brute_ms = summarize_frames(walkers.front()).mean;
+    for (const Walker& w : walkers) {
+      const FrameSummary s = summarize_frames(w);
+      frames_rows.push_back({std::to_string(seed), w.label, fixed(s.mean, 2), fixed(s.sd, 2), fixed(s.p95, 2), fixed(s.max, 2),
+                             fixed(s.mean > 0 ? brute_ms / s.mean : 0.0, 2) + "×", fixed(s.ideal_mean, 2),
+                             std::to_string(s.triangles), std::to_string(s.crossings), std::to_string(s.loads),
+                             fixed(s.max_load, 1)});
+      const FidelitySummary f = summarize(w.fidelity);
+      const double worst = w.angles.empty() ? 0.0 : *std::max_element(w.angles.begin(), w.angles.end());
+      const auto over = std::count_if(w.angles.begin(), w.angles.end(), [&](double a) { return w.stratified && a > w.alpha; });
+      fidelity_rows.push_back({std::to_string(seed), w.label, std::to_string(f.frames),
+                               std::isfinite(f.mean_psnr_db) ? fixed(f.mean_psnr_db, 1) : "inf",
+                               fixed(100 * f.mean_differing_fraction, 3), fixed(100 * f.max_differing_fraction, 3),
+                               std::to_string(f.missed_objects) + " of " + std::to_string(f.visible_objects),
+                               fixed(f.max_pixel_error_px, 1), w.stratified ? fixed(deg(worst), 2) + "°" : "—",
+                               w.stratified ? fixed(deg(w.alpha), 1) + "°" : "—", w.stratified ? std::to_string(over) : "—"});
+      summary["paths"][std::to_string(seed)][w.label] = {
+          {"frame_ms", s.mean}, {"speedup", s.mean > 0 ? brute_ms / s.mean : 0.0}, {"triangles", s.triangles},
+          {"crossings", s.crossings}, {"stall_frames", s.loads}, {"max_far_angle_deg", deg(worst)}, {"frames_over_alpha", over},
+          {"psnr_db", std::isfinite(f.mean_psnr_db) ? Json(f.mean_psnr_db) : Json(nullptr)},
+          {"missed", f.missed_objects}, {"visible", f.visible_objects}};
+      for (size_t i = 0; i < w.frames.size(); ++i)
+        per_frame.push_back({std::to_string(seed), w.label, std::to_string(w.frames[i].frame), fixed(w.frames[i].frame_ms, 3),
+                             std::to_string(w.frames[i].triangles), w.crossings[i] ? "1" : "0",
+                             fixed(w.frames[i].io_ms + w.frames[i].decode_ms, 3), fixed(deg(w.angles[i]), 4)});
+    }
+    write_file_atomically((sub / ("frame-times-seed" + std::to_string(seed) + ".svg")).string(), frame_times_svg(walkers, path_name));
   }
   const Table t61 = table61(configs);
   bench::write_csv(sub / "table61.csv", kTable61Header, t61);
-  bench::write_csv(sub / "frames.csv", {"strategy", "frame", "frame_ms", "triangles", "crossing", "load_ms", "far_angle_deg"},
-                   per_frame);
-  write_file_atomically((sub / "frame-times.svg").string(), frame_times_svg(walkers));
+  bench::write_csv(sub / "frames.csv",
+                   {"path_seed", "strategy", "frame", "frame_ms", "triangles", "crossing", "load_ms", "far_angle_deg"}, per_frame);
 
   std::string md = "# Stratified rendering: the thesis's experiments (seed 002 §6)\n\n";
   md += "Generated by `" + p.command_line + "` on " + bench::utc_now() + " in " + fixed(bench::seconds_since(start) / 60.0, 1) +
@@ -303,12 +313,16 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         " m, " + std::to_string(world.object_count()) + " objects, " + std::to_string(world.triangle_count()) +
         " triangles (the thesis: 1 km × 1 km × 67 m, ~83,000 polygons); built in " + fixed(built.seconds, 1) +
         " s. b = " + fixed(p.box, 0) + " m, faces " + std::to_string(p.resolution) + "², " + std::to_string(p.width) + "×" +
-        std::to_string(p.height) + " images at " + fixed(p.fov_deg, 0) + "° field, llvmpipe; one " + p.path_kind +
-        " path of " + std::to_string(p.frames) + " frames. Only the cells within " + fixed(p.along_margin, 0) +
-        " m of the path are baked; preprocessing and storage for every cell are projected from the measured rate.\n\n";
+        std::to_string(p.height) + " images at " + fixed(p.fov_deg, 0) + "° field, llvmpipe; " +
+        std::to_string(p.path_seeds.size()) + " " + p.path_kind + " paths of " + std::to_string(p.frames) +
+        " frames (seeds as in the tables: a path along the city's edge looks out of it and sees little, one through it "
+        "sees much). Only the cells within " + fixed(p.along_margin, 0) +
+        " m of the paths are baked; preprocessing and storage for every cell are projected from the measured rate.\n\n";
   md += "## Table 6.1\n\n" + bench::md_table(kTable61Header, t61, bench::Align::kFigures);
   md += "\n## Frame time (Figs. 6-1 to 6-3)\n\n" + bench::md_table(kFramesHeader, frames_rows, bench::Align::kFigures);
-  md += "\n![frame times](stratified/frame-times.svg)\n\n`-noprefetch` is the thesis's run time: a crossing loads the "
+  for (const auto& [seed, path] : paths)
+    md += "\n![frame times, seed " + std::to_string(seed) + "](stratified/frame-times-seed" + std::to_string(seed) + ".svg)\n";
+  md += "\n`-noprefetch` is the thesis's run time: a crossing loads the "
         "new cell's near list and far faces in its frame (a stall frame); 'ideal' takes those loads out (Fig. 6-3). "
         "Without the suffix, a thread loads the cells the viewer's velocity reaches within 1.5 s, so a crossing finds its "
         "cell loaded; a stall frame is one that found it not yet loaded.\n";

@@ -12,8 +12,8 @@
 //              pixel error, and the far field's angular error measured from the baked depth
 //              against α on every frame; difference images (128 + test − truth, Figs. 6-4 to
 //              6-7) of a few frames.
-// Writes <out>/stratified.md and <out>/stratified/{table61,frames,summary}.csv, frame-times.svg
-// and the images.
+// Writes <out>/stratified.md and <out>/stratified/{table61,frames,summary}.csv, frame-times-seed<N>.svg
+// and the images. Each path (one per seed) is walked on its own, with fresh strategies.
 #pragma once
 
 #include <cstdint>
@@ -33,7 +33,7 @@ struct StratifiedBenchParams {
   int resolution = 512;                         // texels per face side (§5.3)
   std::string path_kind = "fast";
   int frames = 300;                             // §6.1's path
-  uint64_t path_seed = 3;
+  std::vector<uint64_t> path_seeds = {3, 6, 8};
   float along_margin = 0.0f;  // cells within this of the path are baked
   int width = 512, height = 512;
   double fov_deg = 90.0;
