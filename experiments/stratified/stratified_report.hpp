@@ -38,7 +38,7 @@ struct StratifiedBenchParams {
   int width = 512, height = 512;
   double fov_deg = 90.0;
   int fidelity_every = 10;
-  int images = 4;             // frames whose truth, test and difference images are written
+  int images = 2;             // frames per path whose truth, test and difference images are written
   std::string out_dir = "docs/results";
   std::string work_dir;       // empty = a temporary directory, removed at the end
   std::string command_line;
