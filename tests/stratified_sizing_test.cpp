@@ -224,3 +224,31 @@ TEST(StratifyPlan, BadArgumentsGetOneLineAndAFailure) {
 
 }  // namespace
 }  // namespace cellwalk::stratified
+
+namespace cellwalk::stratified {
+namespace {
+
+TEST(StratifyBuild, BadInputGetsOneLineAndLeavesTheWorldAlone) {
+  const test::TempDir dir;
+  const std::string world = test::write_street_world(dir, 6);
+  const std::vector<uint8_t> before = test::slurp(world);
+  test::spit(dir.file("junk.cww"), {'h', 'i'});
+  for (const std::string& args : {"stratify build " + dir.file("junk.cww"), "stratify build " + world + " --box 1e6",
+                                  "stratify build " + world + " --resolution 0", "stratify build " + world + " --sizing foo",
+                                  "stratify build " + world + " --alpha 0", "stratify build " + world + " --along " + dir.file("none.path"),
+                                  "walk " + world + " --path " + test::source_path("tests/data/seeds/three.path") +
+                                      " --strategy stratified:show=nothing"}) {
+    const test::CommandResult r = test::run_cellwalk(args);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+  }
+  EXPECT_EQ(test::slurp(world), before);
+  // A world without the preprocessing: the strategy names the command that makes it.
+  const test::CommandResult r =
+      test::run_cellwalk("walk " + world + " --path " + test::source_path("tests/data/seeds/three.path") + " --strategy stratified");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("stratify build"), std::string::npos) << r.output;
+}
+
+}  // namespace
+}  // namespace cellwalk::stratified
