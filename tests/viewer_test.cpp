@@ -84,6 +84,17 @@ TEST_F(ViewerTest, BirdsEyeViewDiffersFromTheStreetView) {
   EXPECT_GT(differing, a.rgb.size() / 10);
 }
 
+TEST_F(ViewerTest, BirdsEyeViewOfStratifiedShowsTheViewcellInCyan) {
+  const test::CommandResult built = test::run_cellwalk("stratify build " + scene_ + " --box 30 --resolution 32");
+  ASSERT_EQ(built.exit_code, 0) << built.output;
+  auto r = view("--strategy stratified --frames 2 --birds-eye --screenshot " + dir_.file("bird.png"));
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const Png png = load_png(dir_.file("bird.png"));
+  size_t cyan = 0;
+  for (size_t i = 0; i + 2 < png.rgb.size(); i += 3) cyan += png.rgb[i] == 0 && png.rgb[i + 1] == 255 && png.rgb[i + 2] == 255;
+  EXPECT_GT(cyan, 8u);
+}
+
 TEST_F(ViewerTest, ReplayedPathIsRecordedBackFaithfully) {
   PathParams p;
   p.frames = 5;

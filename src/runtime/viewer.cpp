@@ -11,6 +11,7 @@
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/render/window.hpp"
+#include "cellwalk/systems/stratified/stratified_strategy.hpp"
 #include "core/stopwatch.hpp"
 
 namespace cellwalk {
@@ -104,7 +105,7 @@ std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, 
                 "%s  %.1f fps  frame %.1f ms (query %.1f io %.1f decode %.1f render %.1f)\n"
                 "%llu objects  %llu triangles  %.1f MiB resident\n"
                 "%s%s%s  pos %.1f %.1f %.1f  yaw %.0f pitch %.0f\n"
-                "WASD move, drag look, Shift run, F fly, B bird's-eye, R record, P screenshot, Esc quit",
+                "WASD move, drag look, Shift run, F fly, B bird's-eye, R record, P screenshot, 1-5 show (stratified), Esc quit",
                 strategy.c_str(), fps, f.frame_ms, f.query_ms, f.io_ms, f.decode_ms, f.render_ms,
                 (unsigned long long)f.objects, (unsigned long long)f.triangles, f.resident_bytes / 1048576.0,
                 s.fly ? "fly" : "walk", s.birds_eye ? "  bird's-eye" : "",
@@ -148,6 +149,11 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
     if (key == GLFW_KEY_F) s.fly = !s.fly;
     if (key == GLFW_KEY_B) s.birds_eye = !s.birds_eye;
     if (key == GLFW_KEY_P) s.screenshot_requested = true;
+    // Stratified's show styles (§5.1): 1 full, 2 near, 3 far objects, 4 far texture, 5 brute.
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_5 && is_stratified_strategy_name(options.strategy)) {
+      static const char* const kShows[] = {"full", "near", "far-objects", "far-texture", "brute"};
+      strategy = make_strategy(std::string("stratified:show=") + kShows[key - GLFW_KEY_1], scene, {});
+    }
     if (key == GLFW_KEY_R) {
       if (s.recording) save_recording();
       s.recording = !s.recording;
@@ -196,8 +202,10 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
     FrameStats stats;
     if (s.birds_eye) {
       const Camera top = birds_eye_camera(scene.info().bounds, s.camera);
-      stats = render_frame(*strategy, *renderer, top);
+      // What the walker is shown, seen from above (select from the walker, draw from the top).
+      stats = render_frame(*strategy, *renderer, s.camera, s.clock, nullptr, &top);
       std::vector<LineSegment> lines = boxes;
+      strategy->overlay(lines);
       add_frustum(s.camera, 0.05f * glm::length(scene.info().bounds.size()), lines);
       renderer->draw_lines(top, lines);
     } else {

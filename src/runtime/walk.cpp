@@ -6,7 +6,7 @@
 namespace cellwalk {
 
 FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time,
-                        std::vector<DrawItem>* drawn) {
+                        std::vector<DrawItem>* drawn, const Camera* render_from) {
   FrameStats stats;
   stats.time = time;
   Stopwatch frame_watch;
@@ -21,7 +21,7 @@ FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& ca
     if (!mesh) ++unavailable;
     return mesh;
   };
-  RenderStats rs = renderer.render(camera, items, provider, strategy.far_faces());
+  RenderStats rs = renderer.render(render_from ? *render_from : camera, items, provider, strategy.far_faces());
   const double fetch_ms = (stats.io_ms - io_before) + (stats.decode_ms - decode_before);
   stats.render_ms = std::max(0.0, rs.ms - fetch_ms);
   stats.triangles = rs.triangles;

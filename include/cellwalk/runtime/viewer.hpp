@@ -22,7 +22,9 @@ struct ViewerOptions {
 
 // Runs until the window is closed, Escape is pressed or max_frames is reached.
 // Keys: W/A/S/D move, Q/E down/up (fly), mouse drag looks, Shift runs, F walk/fly,
-// B bird's-eye view, R starts/stops recording, P saves a screenshot, Esc quits.
+// B bird's-eye view (what the walker is shown, seen from above, with its frustum and, for
+// stratified, its viewcell and bounding box), R starts/stops recording, P saves a screenshot,
+// 1-5 switch stratified's show styles (full, near, far objects, far texture, brute), Esc quits.
 void run_viewer(const World& world, const ViewerOptions& options);
 
 }  // namespace cellwalk

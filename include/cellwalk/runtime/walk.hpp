@@ -19,8 +19,10 @@ using ProgressFn = std::function<void(size_t, size_t)>;
 // Renders one frame of `strategy` from `camera` and returns its statistics. `time` (the path
 // time, seconds) is in stats.time when select() runs, so a strategy can measure velocity.
 // With `drawn`, it receives the items the strategy selected (what compare checks misses against).
+// With `render_from`, the strategy selects for `camera` but the frame is drawn from `render_from`
+// (the viewer's bird's-eye view: what the walker is shown, seen from above).
 FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time = 0.0,
-                        std::vector<DrawItem>* drawn = nullptr);
+                        std::vector<DrawItem>* drawn = nullptr, const Camera* render_from = nullptr);
 
 // Replays every frame of `path`. The camera's lens (fov, aspect, near, far) comes from `lens`.
 std::vector<FrameStats> walk(const CameraPath& path, const Camera& lens, Strategy& strategy,

@@ -42,6 +42,10 @@ class Strategy {
   // items; their images stay valid until the next select(). Empty for every other strategy.
   virtual std::span<const FarFace> far_faces() const { return {}; }
 
+  // Lines a viewer's bird's-eye view draws to show the system's own structure around the last
+  // select() (stratified: the viewcell and its bounding box). None by default.
+  virtual void overlay(std::vector<LineSegment>& lines) const { (void)lines; }
+
   // Bytes the strategy holds in memory now (geometry, index, visibility data): what its memory
   // budget bounds.
   virtual uint64_t resident_bytes() const = 0;

@@ -55,6 +55,9 @@ class StratifiedStrategy : public Strategy {
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
   std::span<const FarFace> far_faces() const override;
+  // The current viewcell in cyan and its bounding box in white (the thesis's bird's-eye view,
+  // Fig. 5-2).
+  void overlay(std::vector<LineSegment>& lines) const override;
   uint64_t resident_bytes() const override;
   uint64_t peak_resident_bytes() const override;
   const StratifiedCounters& counters() const;
