@@ -263,6 +263,35 @@ TEST_F(StratifiedSystem, PrefetchHasTheNextCellReadyAtTheCrossing) {
   for (size_t i = 0; i < images[0].size(); ++i) EXPECT_EQ(images[0][i].rgba, images[1][i].rgba) << "frame " << i;
 }
 
+TEST_F(StratifiedSystem, ABudgetTooSmallForACellIsAnErrorNotACrash) {
+  // Budgets between what the constructor checks and one cell's far field: the crossing that
+  // cannot be held must throw Error and leave the budget balanced (no abort in a destructor).
+  RenderSettings settings;
+  settings.width = settings.height = 32;
+  Renderer renderer(settings);
+  const CameraPath path = city_path(world_file_, *dir_);
+  int refused = 0, ran = 0;
+  for (uint64_t budget = 128 << 10; budget <= (3u << 20); budget += 64 << 10)
+    for (const char* name : {"stratified", "stratified:prefetch=0"}) {
+      StrategyOptions options;
+      options.memory_budget_bytes = budget;
+      try {
+        const std::unique_ptr<Strategy> s = make_strategy(name, *world_, options);
+        Camera camera;
+        for (size_t i = 0; i < path.frames.size(); i += 10) {
+          apply(path.frames[i], camera);
+          render_frame(*s, renderer, camera, path.frames[i].time);
+          EXPECT_LE(s->peak_resident_bytes(), budget);
+        }
+        ++ran;
+      } catch (const Error&) {
+        ++refused;
+      }
+    }
+  EXPECT_GT(refused, 0);
+  EXPECT_GT(ran, 0);
+}
+
 TEST(StratifiedName, SettingsAreParsedAndBadOnesRefused) {
   EXPECT_EQ(parse_stratified_strategy_name("stratified:show=far-texture").show, StratifiedConfig::Show::kFarTexture);
   EXPECT_FALSE(parse_stratified_strategy_name("stratified:cull=0").cull);

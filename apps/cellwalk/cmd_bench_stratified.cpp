@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/systems/stratified/far_field.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/stratified/stratified_report.hpp"
@@ -26,7 +27,7 @@ void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--city-seed", p.city.seed, "The city's seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--alpha", p.alphas_deg, "The angular error bounds, degrees (Table 6.1: 7.5 and 1)")->capture_default_str()->check(number_in(0, 89, true));
   cmd->add_option("--box", p.box, "Bounding box side b, metres")->capture_default_str()->check(number_in(0, 1e6, true));
-  cmd->add_option("--resolution", p.resolution, "Texels per face side")->capture_default_str()->check(integer_in(1, 4096));
+  cmd->add_option("--resolution", p.resolution, "Texels per face side")->capture_default_str()->check(integer_in(1, stratified::kMaxFaceResolution));
   cmd->add_option("--path", p.path_kind, "Path kind (normal, fast, ...)")->capture_default_str()->check(session_kind_check());
   cmd->add_option("--frames", p.frames, "Frames of the path")->capture_default_str()->check(integer_in(2, 100000));
   cmd->add_option("--path-seed", p.path_seeds, "The paths' seeds, one path each")->capture_default_str()->check(integer_in(0, INT64_MAX));

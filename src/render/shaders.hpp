@@ -141,7 +141,8 @@ layout(location = 1) out uint o_id;
 void main() {
   vec4 c = texture(u_color, v_st);
   if (c.a < 0.5) discard;
-  o_color = vec4(c.rgb, 1.0);
+  // Empty texels are (0, 0, 0, 0): filtering across an edge mixes them in, so undo the weight.
+  o_color = vec4(c.rgb / c.a, 1.0);
   ivec2 size = textureSize(u_ids, 0);
   o_id = u_has_ids != 0 ? texelFetch(u_ids, clamp(ivec2(v_st * vec2(size)), ivec2(0), size - 1), 0).r : u_face_id;
 }

@@ -28,10 +28,14 @@ std::vector<uint8_t> compress(std::span<const uint8_t> raw) {
   return frame;
 }
 
+void check_frame_size(std::span<const uint8_t> frame, uint64_t bytes, ByteReader& r, const char* what) {
+  if (ZSTD_getFrameContentSize(frame.data(), frame.size()) != bytes)
+    r.error(std::string(what) + ": the zstd frame does not hold one face's texels");
+}
+
 // REQUIRES: `out` has the size the frame must decode to.
 void decompress(std::span<const uint8_t> frame, std::span<uint8_t> out, ByteReader& r, const char* what) {
-  const unsigned long long size = ZSTD_getFrameContentSize(frame.data(), frame.size());
-  if (size != out.size()) r.error(std::string(what) + ": the zstd frame does not hold one face's texels");
+  check_frame_size(frame, out.size(), r, what);
   const size_t n = ZSTD_decompress(out.data(), out.size(), frame.data(), frame.size());
   if (ZSTD_isError(n) || n != out.size()) r.error(std::string(what) + ": damaged zstd frame");
 }
@@ -120,14 +124,21 @@ CellFarField decode_far_field(std::span<const uint8_t> bytes, float b, int resol
     if (!(mask >> face & 1)) continue;
     const uint32_t color_bytes = r.get<uint32_t>("colour bytes"), id_bytes = r.get<uint32_t>("id bytes"),
                    depth_bytes = r.get<uint32_t>("depth bytes");
+    const std::vector<uint8_t> color = r.get_array<uint8_t>(color_bytes, "colour frame");
+    const std::vector<uint8_t> ids = r.get_array<uint8_t>(id_bytes, "id frame");
+    const std::vector<uint8_t> depth_frame = r.get_array<uint8_t>(depth_bytes, "depth frame");
+    // Sizes first: a hostile record must not make the decoder allocate what the frames do not hold.
+    check_frame_size(color, texels * 4, r, "colour");
+    check_frame_size(ids, texels * 4, r, "ids");
+    check_frame_size(depth_frame, texels * 2, r, "depth");
     FaceImage f;
     f.face = face;
     f.color = {resolution, resolution, std::vector<uint8_t>(texels * 4)};
     f.ids = {resolution, resolution, std::vector<uint32_t>(texels)};
     std::vector<uint8_t> depth(texels * 2);
-    decompress(r.get_array<uint8_t>(color_bytes, "colour frame"), f.color.rgba, r, "colour");
-    decompress(r.get_array<uint8_t>(id_bytes, "id frame"), as_writable_bytes(f.ids.ids), r, "ids");
-    decompress(r.get_array<uint8_t>(depth_bytes, "depth frame"), depth, r, "depth");
+    decompress(color, f.color.rgba, r, "colour");
+    decompress(ids, as_writable_bytes(f.ids.ids), r, "ids");
+    decompress(depth_frame, depth, r, "depth");
     for (const uint32_t id : f.ids.ids)
       if (id > object_count) r.error("a texel names object " + std::to_string(id - 1) + ", past the world's objects");
     f.depth = dequantise_depth(depth_from_planes(depth, resolution), b);
@@ -228,15 +239,23 @@ StoredStratified::~StoredStratified() = default;
 std::vector<ObjectId> StoredStratified::near(CellId cell) const {
   if (cell >= partition_->cell_count()) fail("stratified", "cell " + std::to_string(cell) + " is past the stored cells");
   size_t pos = near_offsets_[cell];
+  const std::string where = world_.file().path() + " section stratified (near lists)";
   std::vector<uint32_t> ids = visibility::decode_ids(visibility::IdCodec::kVarintGaps,
-                                                     std::span(near_bytes_).first(near_offsets_[cell + 1]), pos,
-                                                     world_.file().path() + " section stratified (near lists)",
+                                                     std::span(near_bytes_).first(near_offsets_[cell + 1]), pos, where,
                                                      world_.object_count());
+  if (pos != near_offsets_[cell + 1])
+    fail(where + "@" + std::to_string(pos), "bytes after cell " + std::to_string(cell) + "'s near list");
   return {ids.begin(), ids.end()};
 }
 
 uint64_t StoredStratified::far_field_bytes(CellId cell) const {
   return far_offsets_.at(cell + 1) - far_offsets_.at(cell);
+}
+
+uint64_t StoredStratified::load_bound(CellId cell) const {
+  const uint64_t texels = uint64_t(params_.resolution) * params_.resolution;
+  const uint64_t near_record = near_offsets_.at(cell + 1) - near_offsets_.at(cell);
+  return far_field_bytes(cell) + kFaceCount * texels * (4 + 4 + 4) + near_record * sizeof(ObjectId) + 64;
 }
 
 CellFarField StoredStratified::far_field(CellId cell) const {

@@ -87,8 +87,28 @@ CellData load_cell(const StoredStratified& stored, CellId c, bool faces) {
   return d;
 }
 
-// Loads requested cells on a thread of its own, each charged to `budget` (try_reserve: a cell
-// that does not fit is dropped, never waited for). At most kSlots cells are queued or ready.
+// Loads cell c with its load bound reserved in `budget` for the load's duration (taken by
+// `reserve`, which says whether it fits); the bytes the result holds stay reserved, the rest
+// is released. nullopt when the bound does not fit. Rethrows what the load throws, released.
+template <typename Reserve>
+std::optional<CellData> load_within(const StoredStratified& stored, CellId c, bool faces, MemoryBudget& budget,
+                                    Reserve reserve) {
+  const uint64_t bound = stored.load_bound(c);
+  if (!reserve(bound)) return std::nullopt;
+  try {
+    CellData d = load_cell(stored, c, faces);
+    d.bytes = std::min(d.bytes, bound);
+    budget.release(bound - d.bytes);
+    return d;
+  } catch (...) {
+    budget.release(bound);
+    throw;
+  }
+}
+
+// Loads requested cells on a thread of its own, each charged to `budget` (try_reserve of its
+// load bound before it is read: a cell that does not fit is dropped, never waited for). At most
+// kSlots cells are queued, loading or ready.
 // Thread-safety: every method may be called from the owning thread while the loader runs.
 class CellLoader {
  public:
@@ -114,11 +134,13 @@ class CellLoader {
     wake_.notify_all();
   }
 
-  // `c`'s data if it is ready; if it is queued or loading, waits for it. nullopt otherwise (or
-  // when it did not fit the budget). The bytes it holds pass to the caller.
-  std::optional<CellData> take(CellId c) {
+  // `c`'s data if it is ready; if it is queued or loading, waits for it (and sets `waited`).
+  // nullopt otherwise (or when it did not fit the budget). The bytes it holds pass to the caller.
+  std::optional<CellData> take(CellId c, bool& waited) {
     std::unique_lock lock(mutex_);
-    done_.wait(lock, [&] { return !(loading_ == c || std::find(queue_.begin(), queue_.end(), c) != queue_.end()); });
+    auto pending = [&] { return loading_ == c || std::find(queue_.begin(), queue_.end(), c) != queue_.end(); };
+    waited = pending();
+    done_.wait(lock, [&] { return !pending(); });
     const auto it = ready_.find(c);
     if (it == ready_.end()) return std::nullopt;
     CellData d = std::move(it->second);
@@ -145,6 +167,11 @@ class CellLoader {
     std::lock_guard lock(mutex_);
     return loaded_;
   }
+  // Bytes of far-field records the loader has read.
+  uint64_t read_bytes() const {
+    std::lock_guard lock(mutex_);
+    return read_bytes_;
+  }
 
  private:
   // REQUIRES: mutex_ held.
@@ -163,14 +190,14 @@ class CellLoader {
       lock.unlock();
       std::optional<CellData> d;
       try {
-        d = load_cell(stored_, c, faces_);
-        if (!budget_.try_reserve(d->bytes)) d.reset();
-      } catch (const Error&) {
+        d = load_within(stored_, c, faces_, budget_, [&](uint64_t bytes) { return budget_.try_reserve(bytes); });
+      } catch (const std::exception&) {
         d.reset();  // the crossing loads it itself and reports the damage
       }
       lock.lock();
       loading_.reset();
       if (d) {
+        read_bytes_ += faces_ ? stored_.far_field_bytes(c) : 0;
         ready_.emplace(c, std::move(*d));
         ++loaded_;
       }
@@ -186,7 +213,7 @@ class CellLoader {
   std::deque<CellId> queue_;
   std::optional<CellId> loading_;
   std::map<CellId, CellData> ready_;
-  uint64_t loaded_ = 0;
+  uint64_t loaded_ = 0, read_bytes_ = 0;
   bool stop_ = false;
   std::thread thread_;  // last: started once everything it uses exists
 };
@@ -219,23 +246,28 @@ struct StratifiedStrategy::Impl {
     faces.clear();
     store.buffer().budget().release(cell.bytes);
     cell = {};
-    std::optional<CellData> ready = loader ? loader->take(c) : std::nullopt;
+    bool waited = false;
+    std::optional<CellData> ready = loader ? loader->take(c, waited) : std::nullopt;
     const bool first = !current.has_value();
+    const bool from_loader = ready.has_value();
     if (ready) {
       cell = std::move(*ready);
-      ++counters.prefetch_hits;
+      if (!waited) ++counters.prefetch_hits;
     } else {
-      cell = load_cell(stored, c, uses_faces());
-      if (!store.buffer().reserve(cell.bytes))
-        fail("stratified", "the memory budget cannot hold cell " + std::to_string(c) + "'s near list and far faces (" +
-                               std::to_string(cell.bytes) + " bytes) beside the cells; raise --budget");
+      MemoryBudget& budget = store.buffer().budget();
+      ready = load_within(stored, c, uses_faces(), budget, [&](uint64_t bytes) { return store.buffer().reserve(bytes); });
+      if (!ready)
+        fail("stratified", "the memory budget cannot hold loading cell " + std::to_string(c) + "'s near list and far faces (" +
+                               std::to_string(stored.load_bound(c)) + " bytes) beside the cells; raise --budget");
+      cell = std::move(*ready);
       const uint64_t record = uses_faces() ? stored.far_field_bytes(c) : 0;
       stats.bytes_read += record;
+      read_in_frames += record;
       counters.loaded_bytes += record;
-      if (!first) {
-        ++counters.stalls;
-        stats.stall = true;
-      }
+    }
+    if (!first && (!from_loader || waited)) {  // the frame loaded its cell or waited for it
+      ++counters.stalls;
+      stats.stall = true;
     }
     const Vec3 centre = stored.partition().cell(c).box.center();
     for (const FaceImage& f : cell.field.faces) {
@@ -273,6 +305,7 @@ struct StratifiedStrategy::Impl {
     last_position = camera.position;
     last_time = time;
     counters.prefetched = loader->loaded();
+    counters.loaded_bytes = read_in_frames + loader->read_bytes();
   }
 
   // Whether object `id` is drawn as polygons in this show style.
@@ -323,6 +356,7 @@ struct StratifiedStrategy::Impl {
   StoredStratified stored;
   GeometryStore store;
   uint64_t index_bytes = 0;
+  uint64_t read_in_frames = 0;  // far-field record bytes the frames read themselves
   uint64_t peak = 0;  // resident bytes after each load (the store's own peak is taken at its gets)
   std::optional<CellId> current;
   bool crossed = false;

@@ -20,7 +20,8 @@ namespace cellwalk::stratified {
 
 // Faces in the order −Z, −X, +Z, +X (the four vertical faces), +Y, −Y.
 constexpr int kFaceCount = 6;
-constexpr int kMaxFaceResolution = 4096;
+// 8·R² bytes of textures a face (colour and ids) must fit the renderer's far-face budget.
+constexpr int kMaxFaceResolution = 2048;
 
 // The camera that sees face `face` of the box of side b around c: at c, looking out through
 // the face's centre, 90° square, near plane just inside the face.

@@ -78,6 +78,9 @@ class StoredStratified {
   CellFarField far_field(CellId cell) const;
   // Bytes the cell's far-field record takes in the file (what a load reads).
   uint64_t far_field_bytes(CellId cell) const;
+  // At most the bytes loading the cell holds at once: its record as read, six faces decoded
+  // (colour, ids, depth) and its near list. What a loader reserves before it reads.
+  uint64_t load_bound(CellId cell) const;
   // Memory held: parameters, the partition, the encoded near lists and the offsets.
   uint64_t resident_bytes() const;
 

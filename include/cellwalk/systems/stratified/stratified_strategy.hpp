@@ -36,18 +36,19 @@ StratifiedConfig parse_stratified_strategy_name(const std::string& name);
 struct StratifiedCounters {
   uint64_t frames = 0;
   uint64_t crossings = 0;       // frames that entered another cell
-  uint64_t loaded_bytes = 0;    // far-field records read
+  uint64_t loaded_bytes = 0;    // far-field records read, by the frames and the prefetcher
   double load_ms = 0.0;         // reading and decoding them
   uint64_t near_objects = 0;    // Σ over frames of the current cell's near list
   uint64_t prefetched = 0;      // cells loaded ahead by the prefetcher
   uint64_t prefetch_hits = 0;   // crossings that found their cell loaded
-  uint64_t stalls = 0;          // crossings (after the first frame) that had to load or wait
+  uint64_t stalls = 0;          // crossings (after the first frame) that had to load or wait for their cell
 };
 
 class StratifiedStrategy : public Strategy {
  public:
   // Throws Error if the world has no stratified preprocessing (naming the command that makes it)
-  // or the budget cannot hold the geometry store and one cell's far field.
+  // or the budget cannot hold the geometry store and the stored cells; select() throws when it
+  // cannot hold the load of a cell it enters (its load bound: record, six decoded faces, near list).
   StratifiedStrategy(const World& world, const StratifiedConfig& config, const StrategyOptions& options);
   ~StratifiedStrategy() override;
   std::string name() const override;
