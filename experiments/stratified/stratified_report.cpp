@@ -329,7 +329,7 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
   md += "\n`-noprefetch` is the thesis's run time: a crossing loads the "
         "new cell's near list and far faces in its frame (a stall frame); 'ideal' takes those loads out (Fig. 6-3). "
         "Without the suffix, a thread loads the cells the viewer's velocity reaches within 1.5 s, so a crossing finds its "
-        "cell loaded; a stall frame is one that found it not yet loaded.\n";
+        "cell loaded; a stall frame is one that had to load its cell or wait for the prefetcher.\n";
   md += "\n## Fidelity against ground truth, and the far field's angular error\n\n" +
         bench::md_table(kFidelityHeader, fidelity_rows, bench::Align::kFigures);
   md += "\nEvery " + std::to_string(p.fidelity_every) +
