@@ -338,6 +338,15 @@ struct Renderer::Impl {
   uint32_t queued_triangles = 0;  // since the last finish(); at most kDriverBatchTriangles
 };
 
+void append_box_lines(const Aabb& b, Rgba8 color, std::vector<LineSegment>& out) {
+  auto corner = [&](int i) {
+    return Vec3((i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
+  };
+  for (int i = 0; i < 8; ++i)
+    for (int bit : {1, 2, 4})
+      if (!(i & bit)) out.push_back({corner(i), corner(i | bit), color});
+}
+
 Renderer::Renderer(const RenderSettings& settings) : impl_(std::make_unique<Impl>(settings)) {}
 
 Renderer::~Renderer() = default;

@@ -34,16 +34,6 @@ void place_at_start(const SceneInfo& info, Camera& camera) {
   camera.position = info.bounds.center() + Vec3(0, 0, info.bounds.size().z);
 }
 
-// The twelve edges of a box.
-void add_box(const Aabb& b, Rgba8 color, std::vector<LineSegment>& out) {
-  auto corner = [&](int i) {
-    return Vec3((i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
-  };
-  for (int i = 0; i < 8; ++i)
-    for (int bit : {1, 2, 4})
-      if (!(i & bit)) out.push_back({corner(i), corner(i | bit), color});
-}
-
 // The walker's frustum, cut at `depth` metres so it stays readable from above.
 void add_frustum(const Camera& camera, float depth, std::vector<LineSegment>& out) {
   const float h = depth * std::tan(glm::radians(camera.fov_y_deg) * 0.5f), w = h * camera.aspect;
@@ -184,7 +174,7 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
   Stopwatch clock;
   double fps = 0;
   std::vector<LineSegment> boxes;
-  for (ObjectId id = 0; id < scene.object_count(); ++id) add_box(scene.object(id).bounds, rgba8(40, 40, 40), boxes);
+  for (ObjectId id = 0; id < scene.object_count(); ++id) append_box_lines(scene.object(id).bounds, rgba8(40, 40, 40), boxes);
   for (int frame = 0; !window.should_close(); ++frame) {
     if (options.max_frames > 0 && frame >= options.max_frames) break;
     const double dt = std::min(clock.lap_ms() / 1000.0, 0.25);

@@ -77,6 +77,9 @@ struct LineSegment {
   Rgba8 color = rgba8(255, 255, 0);
 };
 
+// Appends the twelve edges of `box` to `out`.
+void append_box_lines(const Aabb& box, Rgba8 color, std::vector<LineSegment>& out);
+
 struct RenderStats {
   uint64_t triangles = 0;
   uint64_t objects = 0;

@@ -403,26 +403,11 @@ double StratifiedStrategy::far_angle(const Camera& camera) const {
 
 bool StratifiedStrategy::crossed() const { return impl_->crossed; }
 
-namespace {
-
-void add_box_lines(const Aabb& b, Rgba8 color, std::vector<LineSegment>& out) {
-  for (int i = 0; i < 8; ++i)
-    for (int axis = 0; axis < 3; ++axis) {
-      if (i >> axis & 1) continue;  // each edge once, from its lower corner
-      const Vec3 a((i & 1) ? b.max.x : b.min.x, (i & 2) ? b.max.y : b.min.y, (i & 4) ? b.max.z : b.min.z);
-      Vec3 c = a;
-      c[axis] = b.max[axis];
-      out.push_back({a, c, color});
-    }
-}
-
-}  // namespace
-
 void StratifiedStrategy::overlay(std::vector<LineSegment>& lines) const {
   if (!impl_->current) return;
   const ViewCell& cell = impl_->stored.partition().cell(*impl_->current);
-  add_box_lines(cell.box, rgba8(0, 255, 255), lines);
-  add_box_lines(bounding_box(cell, impl_->stored.params().b), rgba8(255, 255, 255), lines);
+  append_box_lines(cell.box, rgba8(0, 255, 255), lines);
+  append_box_lines(bounding_box(cell, impl_->stored.params().b), rgba8(255, 255, 255), lines);
 }
 
 uint64_t StratifiedStrategy::resident_bytes() const { return impl_->store.resident_bytes(); }
