@@ -1,0 +1,72 @@
+// Li & Chiang (seed 003, ISMIP 1999): the walkthrough system of visible sets per viewpoint
+// configuration, prioritized prefetching by a relevance matrix, and the hybrid cache. Each
+// frame: find the configuration (view cell, yaw sector); draw the union of the sets of its
+// 1-neighbours ("Visibility Pre-computation": the conservative approach); fetch what is not
+// resident (t_c, a stall); then hand the neighbouring configurations' objects to a loader
+// thread in relevance order (t_p: it runs while the frame draws, and what it has not started
+// when the viewer's configuration or motion changes is dropped, with a bound on loads in
+// flight). The cache is LRU across frames and by relevance within one ("Hybrid Cache Model").
+// The sets are the stored from-region sets of `cellwalk pvs` (any engine, any cells).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include "cellwalk/strategy/strategy.hpp"
+
+namespace cellwalk {
+
+// Name: "lichiang[:key=value,...]" with keys
+//   cache=hybrid       hybrid (LRU across frames, relevance within one), lru, or none (nothing is
+//                      kept from one frame to the next: the seed's case 1)
+//   prefetch=relevance relevance (the relevance matrix's window, most relevant first), one-step
+//                      (the configuration the viewer moves into next, [Chim 98]), or none
+//   sectors=8          orientation sectors of a configuration (1: position only)
+//   neighbours=1       draw the union of the 1-neighbours' sets, as the seed (0: the own set)
+//   in_flight=2        prefetch loads at once (the bound on outstanding requests)
+//   cull=1             frustum-cull what is drawn (0: draw the whole union)
+// The seed's four cases: cache=none,prefetch=none; cache=lru,prefetch=none;
+// cache=lru,prefetch=one-step; cache=hybrid,prefetch=relevance (the default).
+struct LiChiangConfig {
+  enum class Cache { kNone, kLru, kHybrid };
+  enum class Prefetch { kNone, kOneStep, kRelevance };
+  Cache cache = Cache::kHybrid;
+  Prefetch prefetch = Prefetch::kRelevance;
+  int sectors = 8;
+  bool neighbours = true;
+  int in_flight = 2;
+  bool cull = true;
+};
+bool is_lichiang_strategy_name(const std::string& name);
+LiChiangConfig parse_lichiang_strategy_name(const std::string& name);
+
+struct LiChiangCounters {
+  uint64_t frames = 0;
+  uint64_t configuration_changes = 0;  // frames whose (cell, sector) differs from the last's
+  uint64_t plans = 0;                  // prefetch plans made (configuration or motion changed)
+  uint64_t prefetch_requests = 0;      // objects handed to the loader thread
+  uint64_t drawn_ids = 0;              // Σ over frames of the union drawn (before culling)
+  uint64_t own_ids = 0;                // Σ over frames of the configuration's own set
+};
+
+class LiChiangStrategy : public Strategy {
+ public:
+  // Throws Error if the world has no stored sets (naming the command that makes them), or the
+  // budget cannot hold them beside the directory and the loads in flight.
+  LiChiangStrategy(const World& world, const LiChiangConfig& config, const StrategyOptions& options);
+  ~LiChiangStrategy() override;
+  std::string name() const override;
+  // Throws Error when the camera stands in a cell `pvs --along` skipped.
+  void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
+  uint64_t resident_bytes() const override;
+  uint64_t peak_resident_bytes() const override;
+  const LiChiangCounters& counters() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk

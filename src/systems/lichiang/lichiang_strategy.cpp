@@ -1,0 +1,293 @@
+// Li & Chiang (seed 003): "Visibility Pre-computation", "Prioritized Spatial Prefetching",
+// "Data Caching: Hybrid Cache Model" (cellwalk/systems/lichiang/lichiang_strategy.hpp).
+#include "cellwalk/systems/lichiang/lichiang_strategy.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <optional>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "cellwalk/core/byte_size.hpp"
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/store/geometry_store.hpp"
+#include "cellwalk/store/prefetcher.hpp"
+#include "cellwalk/systems/lichiang/configurations.hpp"
+#include "cellwalk/systems/lichiang/relevance.hpp"
+#include "cellwalk/visibility/stored_pvs.hpp"
+#include "core/stopwatch.hpp"
+#include "strategy/strategy_config.hpp"
+
+namespace cellwalk {
+
+bool is_lichiang_strategy_name(const std::string& name) {
+  return name == "lichiang" || name.rfind("lichiang:", 0) == 0;
+}
+
+LiChiangConfig parse_lichiang_strategy_name(const std::string& name) {
+  if (!is_lichiang_strategy_name(name))
+    fail("strategy \"" + name + "\"", "not a Li-Chiang name (lichiang[:key=value,...])");
+  LiChiangConfig c;
+  for_each_strategy_setting(name, [&](const StrategySetting& s) {
+    if (s.key == "cache") {
+      s.choice({"none", "lru", "hybrid"});
+      c.cache = s.value == "none" ? LiChiangConfig::Cache::kNone
+                : s.value == "lru" ? LiChiangConfig::Cache::kLru : LiChiangConfig::Cache::kHybrid;
+    } else if (s.key == "prefetch") {
+      s.choice({"none", "one-step", "relevance"});
+      c.prefetch = s.value == "none" ? LiChiangConfig::Prefetch::kNone
+                   : s.value == "one-step" ? LiChiangConfig::Prefetch::kOneStep : LiChiangConfig::Prefetch::kRelevance;
+    } else if (s.key == "sectors") c.sectors = int(s.number(1, 64));
+    else if (s.key == "neighbours") c.neighbours = s.number(0, 1) != 0;
+    else if (s.key == "in_flight") c.in_flight = int(s.number(1, 64));
+    else if (s.key == "cull") c.cull = s.number(0, 1) != 0;
+    else s.unknown("cache, prefetch, sectors, neighbours, in_flight, cull");
+  });
+  if (c.sectors != 1 && c.sectors < 3)
+    fail("strategy \"" + name + "\"", "sectors must be 1 (position only) or at least 3: with 2, a sector and its neighbours are every direction twice");
+  return c;
+}
+
+namespace {
+
+using Prefetch = LiChiangConfig::Prefetch;
+
+visibility::StoredPvs open_sets(const World& world) {
+  if (!world.file().has_section(visibility::kPvsSection))
+    fail(world.file().path(), "has no visible sets for lichiang; run `cellwalk pvs " + world.file().path() +
+                                  " --cells grid:SIZE` first (any engine)");
+  return visibility::StoredPvs(world);
+}
+
+double signed_angle(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
+
+// What makes a prefetch plan: when none of it changes, the queued plan still holds.
+struct PlanKey {
+  CellId cell = 0;
+  int sector = 0;
+  int shift = 0;       // ⌈ν⌉
+  long omega = 0;      // ω in steps of 0.05 rad per frame
+  bool operator==(const PlanKey&) const = default;
+};
+
+}  // namespace
+
+struct LiChiangStrategy::Impl {
+  Impl(const World& w, const LiChiangConfig& c, const StrategyOptions& o)
+      : world(w),
+        config(c),
+        options(o),
+        pvs(open_sets(w)),
+        store(w, o.memory_budget_bytes,
+              c.cache == LiChiangConfig::Cache::kHybrid ? make_hybrid_relevance_policy() : make_lru_policy(),
+              c.prefetch != Prefetch::kNone ? 2 : 1),
+        prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone ? 1u : 0u, size_t(c.in_flight)}) {
+    pvs_bytes = pvs.resident_bytes();
+    if (!store.buffer().budget().try_reserve(pvs_bytes))
+      fail(w.file().path(), "memory budget of " + byte_size_text(o.memory_budget_bytes) +
+                                " cannot hold the stored visible sets (" + byte_size_text(pvs_bytes) +
+                                ") beside the directory and the loads in flight; give a larger --budget");
+  }
+  ~Impl() { store.buffer().budget().release(pvs_bytes + sets_bytes); }
+
+  const World& world;
+  LiChiangConfig config;
+  StrategyOptions options;
+  visibility::StoredPvs pvs;
+  GeometryStore store;
+  uint64_t pvs_bytes = 0;
+  // Decoded sets of the cells the last frame used, charged to the budget as sets_bytes.
+  std::unordered_map<CellId, std::vector<ObjectId>> sets;
+  std::unordered_set<CellId> touched;
+  uint64_t sets_bytes = 0;
+  std::optional<Camera> last;  // the previous frame's camera: ν and ω
+  std::optional<CellId> cell;
+  int sector = 0;
+  uint64_t frame = 0;  // the frame select() chose last: the hybrid cache's clock
+  std::optional<PlanKey> planned;
+  std::vector<CacheKey> used;  // cache=none: what the last frame read, dropped before the next
+  LiChiangCounters counters;
+  std::shared_ptr<const Mesh> current;  // the mesh handed to the renderer for upload
+  Prefetcher prefetcher;                // last: destroyed first, while what its jobs use exists
+
+  const ViewCellPartition& cells() const { return pvs.partition(); }
+
+  const std::vector<ObjectId>& set_of(CellId c) {
+    touched.insert(c);
+    auto it = sets.find(c);
+    if (it != sets.end()) return it->second;
+    std::optional<VisibleSet> s = pvs.set(c);
+    return sets.emplace(c, s ? std::move(s->objects) : std::vector<ObjectId>{}).first->second;
+  }
+
+  // The cell `dx`, `dz` cells from the current one along x and z, if it has a set.
+  std::optional<CellId> offset_cell(int dx, int dz) const {
+    const Aabb& box = cells().cell(*cell).box;
+    const Vec3 size = box.max - box.min;
+    const Vec3 p = box.center() + Vec3(float(dx) * size.x, 0.0f, float(dz) * size.z);
+    const std::optional<CellId> c = cells().locate(p);
+    if (!c || !cells().cell(*c).computed()) return std::nullopt;
+    return c;
+  }
+
+  // Adds the objects of configuration (c, directions) to `out`, skipping those in `seen`.
+  void add_configuration(CellId c, const lichiang::YawRange& directions, std::vector<ObjectId>& out,
+                         std::unordered_set<ObjectId>& seen) {
+    const Aabb& box = cells().cell(c).box;
+    for (ObjectId id : set_of(c))
+      if (!seen.contains(id) && lichiang::directions_between(box, world.object(id).bounds).meets(directions)) {
+        seen.insert(id);
+        out.push_back(id);
+      }
+  }
+
+  // Frees the decoded sets no configuration of this frame used and charges the rest.
+  void settle_sets() {
+    std::erase_if(sets, [&](const auto& entry) { return !touched.contains(entry.first); });
+    touched.clear();
+    uint64_t bytes = 0;
+    for (const auto& [c, ids] : sets) bytes += ids.capacity() * sizeof(ObjectId) + 32;
+    store.buffer().budget().release(sets_bytes);
+    sets_bytes = 0;
+    if (!store.buffer().reserve(bytes))
+      fail("lichiang", "memory budget of " + byte_size_text(options.memory_budget_bytes) + " cannot hold the sets of " +
+                           std::to_string(sets.size()) + " cells (" + byte_size_text(bytes) + "); give a larger --budget");
+    sets_bytes = bytes;
+  }
+
+  // The union of the sets of the current configuration's 1-neighbours (or its own set).
+  std::vector<ObjectId> drawn_set(std::optional<double> margin) {
+    std::vector<ObjectId> out;
+    std::unordered_set<ObjectId> seen;
+    const int reach = config.neighbours ? 1 : 0;
+    const lichiang::YawRange own = lichiang::sector_range(sector, 0, config.sectors, margin);
+    add_configuration(*cell, own, out, seen);
+    counters.own_ids += out.size();
+    const lichiang::YawRange around = lichiang::sector_range(sector, reach, config.sectors, margin);
+    for (int dx = -reach; dx <= reach; ++dx)
+      for (int dz = -reach; dz <= reach; ++dz)
+        if (const std::optional<CellId> c = offset_cell(dx, dz)) add_configuration(*c, around, out, seen);
+    counters.drawn_ids += out.size();
+    return out;
+  }
+
+  void submit(ObjectId id, double w, uint64_t frame) {
+    const CacheKey key = GeometryStore::key(id, 0);
+    if (store.buffer().resident_or_loading(key)) return;
+    prefetcher.submit({key, w, frame, EntryMeta{.relevance = float(w), .frame = frame}, store.loader(id, 0)});
+    ++counters.prefetch_requests;
+  }
+
+  // t_p: the objects of the neighbouring configurations the viewer will want, for the loader
+  // thread. Planned again only when the configuration or the motion changes; the old plan's
+  // requests not yet started are dropped then.
+  void plan_prefetch(const std::vector<ObjectId>& drawn, double nu, double omega, double yaw,
+                     std::optional<double> margin, uint64_t frame) {
+    const PlanKey key{*cell, sector, nu > 0 ? int(std::ceil(nu)) : 0, std::lround(omega / 0.05)};
+    if (planned == key) return;
+    planned = key;
+    ++counters.plans;
+    prefetcher.cancel_older_than(frame);
+    std::unordered_set<ObjectId> seen(drawn.begin(), drawn.end());
+    const lichiang::YawRange directions = lichiang::sector_range(sector, 1, config.sectors, margin);
+    std::vector<ObjectId> ids;
+    if (config.prefetch == Prefetch::kRelevance) {
+      for (const lichiang::RelevanceEntry& e : lichiang::relevance_window(nu, omega, yaw)) {
+        const std::optional<CellId> c = offset_cell(e.dx, e.dz);
+        if (!c) continue;
+        ids.clear();
+        add_configuration(*c, directions, ids, seen);
+        for (ObjectId id : ids) submit(id, e.w, frame);
+      }
+    } else {  // one step: the configuration the viewer moves into next, and its 1-neighbours
+      const double step = std::max(1, key.shift);
+      const int sx = int(std::lround(-std::sin(yaw) * step)), sz = int(std::lround(-std::cos(yaw) * step));
+      for (int dx = -1; dx <= 1; ++dx)
+        for (int dz = -1; dz <= 1; ++dz)
+          if (const std::optional<CellId> c = offset_cell(sx + dx, sz + dz)) add_configuration(*c, directions, ids, seen);
+      for (ObjectId id : ids) submit(id, 0.0, frame);
+    }
+  }
+};
+
+LiChiangStrategy::LiChiangStrategy(const World& world, const LiChiangConfig& config, const StrategyOptions& options)
+    : impl_(std::make_unique<Impl>(world, config, options)) {}
+
+LiChiangStrategy::~LiChiangStrategy() = default;
+
+std::string LiChiangStrategy::name() const {
+  const LiChiangConfig& c = impl_->config;
+  const LiChiangConfig d;
+  std::string s;
+  auto add = [&](const std::string& item) { s += (s.empty() ? "" : ",") + item; };
+  if (c.cache != d.cache) add(std::string("cache=") + (c.cache == LiChiangConfig::Cache::kNone ? "none" : "lru"));
+  if (c.prefetch != d.prefetch) add(std::string("prefetch=") + (c.prefetch == Prefetch::kNone ? "none" : "one-step"));
+  if (c.sectors != d.sectors) add("sectors=" + std::to_string(c.sectors));
+  if (c.neighbours != d.neighbours) add("neighbours=0");
+  if (c.in_flight != d.in_flight) add("in_flight=" + std::to_string(c.in_flight));
+  if (c.cull != d.cull) add("cull=0");
+  return s.empty() ? "lichiang" : "lichiang:" + s;
+}
+
+// Outside every cell (or in a solid one) no set holds: the frame draws the frustum, as brute.
+void LiChiangStrategy::select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) {
+  Stopwatch watch;
+  Impl& s = *impl_;
+  const uint64_t frame = s.frame = s.counters.frames++;
+  if (s.config.cache == LiChiangConfig::Cache::kNone) {
+    for (CacheKey key : s.used) s.store.buffer().erase(key);
+    s.used.clear();
+  }
+  const std::optional<CellId> c = s.cells().locate(camera.position);
+  if (c && s.cells().cell(*c).skipped) fail_in_skipped_cell("lichiang", s.cells().cell(*c), camera.position);
+  const double yaw = glm::radians(double(camera.yaw_deg));
+  const int sector = s.config.sectors == 1 ? 0 : lichiang::sector_of(yaw, s.config.sectors);
+  if (c && s.cell && (*c != *s.cell || sector != s.sector)) ++s.counters.configuration_changes;
+  s.cell = c && s.cells().cell(*c).computed() ? c : std::nullopt;
+  s.sector = sector;
+  double nu = 0.0, omega = 0.0;
+  if (s.last && s.cell) {
+    const Vec3 size = s.cells().cell(*s.cell).box.max - s.cells().cell(*s.cell).box.min;
+    nu = std::hypot(camera.position.x - s.last->position.x, camera.position.z - s.last->position.z) /
+         std::max(1e-6f, std::min(size.x, size.z));
+    omega = signed_angle(glm::radians(double(camera.yaw_deg - s.last->yaw_deg)));
+  }
+  s.last = camera;
+  const std::optional<double> margin = s.config.sectors == 1 ? std::nullopt : lichiang::yaw_half_extent(camera);
+  items.clear();
+  const Frustum frustum(camera);
+  auto add = [&](ObjectId id) {
+    const ObjectRecord& o = s.world.object(id);
+    if (!s.config.cull || frustum.intersects(o.bounds)) items.push_back({id, 0, o.color});
+  };
+  if (s.cell) {
+    const std::vector<ObjectId> drawn = s.drawn_set(margin);
+    for (ObjectId id : drawn) add(id);
+    if (s.config.prefetch != Prefetch::kNone) s.plan_prefetch(drawn, nu, omega, yaw, margin, frame);
+  } else {
+    for (ObjectId id = 0; id < s.world.object_count(); ++id)
+      if (frustum.intersects(s.world.object(id).bounds)) add(id);
+  }
+  s.settle_sets();
+  stats.query_ms += watch.ms();
+}
+
+// An object neither resident nor prefetched is read now (t_c): the frame stalls on it. Drawn
+// objects are the most relevant of their frame.
+const Mesh* LiChiangStrategy::mesh(const DrawItem& item, FrameStats& stats) {
+  Impl& s = *impl_;
+  s.current.reset();  // the renderer has uploaded it: let the store evict it
+  const uint64_t misses = stats.cache_misses;
+  const EntryMeta meta{.relevance = float(lichiang::RelevanceParams{}.c), .frame = s.frame};
+  s.current = s.store.get(item.id, item.lod, meta, stats);
+  stats.stall = stats.stall || stats.cache_misses > misses;
+  if (s.config.cache == LiChiangConfig::Cache::kNone) s.used.push_back(GeometryStore::key(item.id, item.lod));
+  return s.current.get();
+}
+
+uint64_t LiChiangStrategy::resident_bytes() const { return impl_->store.resident_bytes(); }
+uint64_t LiChiangStrategy::peak_resident_bytes() const { return impl_->store.peak_resident_bytes(); }
+const LiChiangCounters& LiChiangStrategy::counters() const { return impl_->counters; }
+
+}  // namespace cellwalk
