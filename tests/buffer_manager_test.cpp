@@ -97,6 +97,45 @@ struct LruOracle {
   }
 };
 
+// Li & Chiang's hybrid cache: a prefetch evicts only what the hybrid order puts before it (an
+// older frame, or its own frame and less relevant), never what the frame draws (relevance c);
+// touch() re-stamps a resident item as this frame's. Under LRU a prefetch evicts as a get does.
+TEST(BufferManager, HybridPrefetchNeverDisplacesWhatRanksAboveIt) {
+  auto fill = [](BufferManager& cache, MemoryBudget& budget, uint64_t frame) {
+    std::vector<CacheKey> keys;
+    for (CacheKey key = 0; budget.used() + size_of(key) <= budget.limit(); ++key) {
+      cache.get(key, EntryMeta{.relevance = 255.0f, .frame = frame}, loader_for(key));
+      keys.push_back(key);
+    }
+    return keys;
+  };
+  constexpr uint64_t kFull = 2290;  // keys 0-4 exactly: any admission must evict
+  MemoryBudget budget(kFull);
+  BufferManager cache(budget, make_hybrid_relevance_policy());
+  const std::vector<CacheKey> drawn = fill(cache, budget, 1);
+  ASSERT_EQ(budget.used(), kFull);
+  const CacheKey guess = 900, later = 1800;  // 100 bytes each, as key 0
+  ASSERT_EQ(size_of(guess), size_of(drawn[0]));
+  EXPECT_FALSE(cache.prefetch(guess, EntryMeta{.relevance = 10.0f, .frame = 1}, loader_for(guess)));
+  for (CacheKey key : drawn) EXPECT_TRUE(cache.contains(key)) << key;
+  // Frame 2 draws all but the first; the first is now the oldest and gives way to a frame-2 guess.
+  for (size_t i = 1; i < drawn.size(); ++i) EXPECT_TRUE(cache.touch(drawn[i], EntryMeta{.relevance = 255.0f, .frame = 2}));
+  EXPECT_FALSE(cache.touch(guess, EntryMeta{.frame = 2}));
+  EXPECT_TRUE(cache.prefetch(guess, EntryMeta{.relevance = 10.0f, .frame = 2}, loader_for(guess)));
+  EXPECT_FALSE(cache.contains(drawn[0]));
+  for (size_t i = 1; i < drawn.size(); ++i) EXPECT_TRUE(cache.contains(drawn[i])) << i;
+  // A second, less relevant guess of frame 2 cannot displace the first.
+  EXPECT_FALSE(cache.prefetch(later, EntryMeta{.relevance = 5.0f, .frame = 2}, loader_for(later)));
+  EXPECT_TRUE(cache.contains(guess));
+  EXPECT_LE(budget.peak(), kFull);
+
+  MemoryBudget lru_budget(kFull);
+  BufferManager lru(lru_budget, make_lru_policy());
+  fill(lru, lru_budget, 1);
+  EXPECT_TRUE(lru.prefetch(guess, EntryMeta{}, loader_for(guess)));
+  EXPECT_FALSE(lru.contains(0));
+}
+
 // Bytes a caller charges beside the cache (vLOD's resident set): cached items that nobody holds
 // make room, least recently used first; a held item stays; more than the budget is refused.
 TEST(BufferManager, ReserveEvictsWhatNobodyHolds) {

@@ -84,6 +84,7 @@ void register_bench(CLI::App& root) {
   register_bench_visibility(*bench, command_line);
   register_bench_vlod(*bench, command_line);
   register_bench_stratified(*bench, command_line);
+  register_bench_lichiang(*bench, command_line);
   register_bench_disk_order(*bench, command_line);
 }
 

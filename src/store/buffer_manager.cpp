@@ -64,7 +64,7 @@ CacheResult BufferManager::load(CacheKey key, const EntryMeta& meta, const ItemL
   lock.lock();
   loading_.erase(key);
   counters_.bytes_loaded += item.bytes;
-  const bool cached = admit(key, meta, item);
+  const bool cached = admit(key, meta, item, kind);
   if (!cached) ++counters_.transient;
   promise.set_value(item);
   return {std::move(item.value), false, cached};
@@ -72,11 +72,11 @@ CacheResult BufferManager::load(CacheKey key, const EntryMeta& meta, const ItemL
 
 // Evicts victims until the budget takes the item. May evict and still fail when the space freed
 // is not enough (everything left is pinned, in use or another manager's).
-bool BufferManager::admit(CacheKey key, const EntryMeta& meta, const LoadedItem& item) {
+bool BufferManager::admit(CacheKey key, const EntryMeta& meta, const LoadedItem& item, Kind kind) {
   if (!budget_.could_fit(item.bytes)) return false;
   while (!budget_.try_reserve(item.bytes)) {
     const std::optional<CacheKey> victim = evictable_victim();
-    if (!victim) return false;
+    if (!victim || (kind == Kind::kPrefetch && !policy_->yields_to_prefetch(*victim, meta))) return false;
     evict(*victim);
   }
   items_.emplace(key, Item{item.value, item.bytes, 0});
@@ -135,6 +135,13 @@ bool BufferManager::reserve(uint64_t bytes) {
     if (!victim) return false;
     evict(*victim);
   }
+  return true;
+}
+
+bool BufferManager::touch(CacheKey key, const EntryMeta& meta) {
+  std::lock_guard lock(mutex_);
+  if (!items_.contains(key)) return false;
+  policy_->on_access(key, meta);
   return true;
 }
 

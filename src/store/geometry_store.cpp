@@ -34,13 +34,17 @@ GeometryStore::GeometryStore(const World& world, uint64_t budget_bytes, std::uni
       load_headroom_(largest_load(world) * std::max(1u, loads_in_flight)),
       budget_(budget_bytes == 0 ? 0 : budget_bytes > load_headroom_ ? budget_bytes - load_headroom_ : 1),
       directory_bytes_(world.resident_bytes()) {
-  if (budget_bytes != 0 && budget_bytes < directory_bytes_ + load_headroom_)
+  if (budget_bytes != 0 && budget_bytes < fixed_bytes(world, loads_in_flight))
     fail(world.file().path(), "memory budget of " + byte_size_text(budget_bytes) +
                                   " is too small: the world's directory and its largest level need " +
-                                  byte_size_text(directory_bytes_ + load_headroom_) + "; give a larger --budget");
+                                  byte_size_text(fixed_bytes(world, loads_in_flight)) + "; give a larger --budget");
   if (!budget_.try_reserve(directory_bytes_)) fail(world.file().path(), "internal: directory does not fit the budget");
   buffer_ = std::make_unique<BufferManager>(budget_, policy ? std::move(policy) : make_lru_policy());
   peak_ = resident_bytes();
+}
+
+uint64_t GeometryStore::fixed_bytes(const World& world, unsigned loads_in_flight) {
+  return world.resident_bytes() + largest_load(world) * std::max(1u, loads_in_flight);
 }
 
 GeometryStore::~GeometryStore() {

@@ -79,6 +79,9 @@ class BufferManager {
   bool prefetch(CacheKey key, const EntryMeta& meta, const ItemLoader& loader);
 
   bool contains(CacheKey key) const;
+  // Counts as an access of a resident item with `meta`, without handing it out (e.g. to mark
+  // what a frame will draw before a prefetch runs); false, doing nothing, if it is not resident.
+  bool touch(CacheKey key, const EntryMeta& meta);
   // Whether `key` is resident or being loaded by some caller.
   bool resident_or_loading(CacheKey key) const;
   // Reserves `bytes` in the budget for the caller (data it holds beside the cache), evicting
@@ -110,7 +113,7 @@ class BufferManager {
 
   CacheResult load(CacheKey key, const EntryMeta& meta, const ItemLoader& loader, Kind kind,
                    std::unique_lock<std::mutex>& lock);
-  bool admit(CacheKey key, const EntryMeta& meta, const LoadedItem& item);
+  bool admit(CacheKey key, const EntryMeta& meta, const LoadedItem& item, Kind kind);
   std::optional<CacheKey> evictable_victim();
   void evict(CacheKey key);
   void remove(std::unordered_map<CacheKey, Item>::iterator it);

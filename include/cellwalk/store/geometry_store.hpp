@@ -25,6 +25,10 @@ class GeometryStore {
                 std::unique_ptr<ReplacementPolicy> policy = nullptr, unsigned loads_in_flight = 1);
   ~GeometryStore();
 
+  // What a store over `world` holds whatever it caches: the directory and room for
+  // `loads_in_flight` of the world's largest level, encoded and decoded. A budget must exceed it.
+  static uint64_t fixed_bytes(const World& world, unsigned loads_in_flight);
+
   // The decoded mesh of one level; reads and decodes on a miss, adding I/O and decode time,
   // bytes read, hits and misses to `stats`. A mesh too large for the budget even when
   // everything else is evicted is returned uncached and counted in resident_bytes() while the

@@ -66,6 +66,13 @@ class ReplacementPolicy {
   virtual void unpin(CacheKey key) = 0;
   // A new query or frame begins (DPLRU ages its entries and re-scores; others ignore it).
   virtual void on_query(const QueryContext&) {}
+  // Whether a prefetch admitted now with `newcomer` may evict `key` (the victim() of the
+  // moment) to make room: a guess about the future must not displace what the policy keeps
+  // longer. REQUIRES: key is tracked. Every policy but HybridRelevance: yes.
+  virtual bool yields_to_prefetch(CacheKey key, const EntryMeta& newcomer) const {
+    (void)key, (void)newcomer;
+    return true;
+  }
   virtual size_t size() const = 0;
 };
 
@@ -91,6 +98,8 @@ enum class DovTimeClock { kAccesses, kQueries };
 std::unique_ptr<ReplacementPolicy> make_dov_time_policy(double kappa = 0.001,
                                                         DovTimeClock clock = DovTimeClock::kAccesses);
 // LRU across frames, lowest relevance first within the least recently used frame (seeds/003).
+// A prefetch evicts only entries that order puts before it: of an older frame, or of its own
+// frame and less relevant.
 std::unique_ptr<ReplacementPolicy> make_hybrid_relevance_policy();
 
 // The mechanism of every policy but LRU: an ordered set of (score, key) plus a hash map from key

@@ -14,6 +14,13 @@ class HybridRelevancePolicy final : public ScoredPolicy {
     return {static_cast<double>(entry.meta.frame), static_cast<double>(entry.meta.relevance),
             static_cast<double>(entry.last_access)};
   }
+  // The newcomer ranks as the most recent access of its frame and relevance.
+  bool yields_to_prefetch(CacheKey key, const EntryMeta& newcomer) const override {
+    Entry candidate;
+    candidate.meta = newcomer;
+    candidate.last_access = UINT64_MAX;
+    return entries().at(key).score < score(candidate);
+  }
 };
 
 }  // namespace

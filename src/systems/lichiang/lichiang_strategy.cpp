@@ -25,6 +25,17 @@ bool is_lichiang_strategy_name(const std::string& name) {
   return name == "lichiang" || name.rfind("lichiang:", 0) == 0;
 }
 
+namespace {
+
+// A setting that must be a whole number in [lo, hi].
+int whole(const StrategySetting& s, int lo, int hi) {
+  const double v = s.number(lo, hi);
+  if (v != std::floor(v)) fail("strategy \"" + s.name + "\"", s.key + "=" + s.value + " is not a whole number");
+  return int(v);
+}
+
+}  // namespace
+
 LiChiangConfig parse_lichiang_strategy_name(const std::string& name) {
   if (!is_lichiang_strategy_name(name))
     fail("strategy \"" + name + "\"", "not a Li-Chiang name (lichiang[:key=value,...])");
@@ -38,14 +49,13 @@ LiChiangConfig parse_lichiang_strategy_name(const std::string& name) {
       s.choice({"none", "one-step", "relevance"});
       c.prefetch = s.value == "none" ? LiChiangConfig::Prefetch::kNone
                    : s.value == "one-step" ? LiChiangConfig::Prefetch::kOneStep : LiChiangConfig::Prefetch::kRelevance;
-    } else if (s.key == "sectors") c.sectors = int(s.number(1, 64));
-    else if (s.key == "neighbours") c.neighbours = s.number(0, 1) != 0;
-    else if (s.key == "in_flight") c.in_flight = int(s.number(1, 64));
-    else if (s.key == "cull") c.cull = s.number(0, 1) != 0;
-    else s.unknown("cache, prefetch, sectors, neighbours, in_flight, cull");
+    } else if (s.key == "sectors") c.sectors = whole(s, 1, 64);
+    else if (s.key == "neighbours") c.neighbours = whole(s, 0, 1) != 0;
+    else if (s.key == "cull") c.cull = whole(s, 0, 1) != 0;
+    else s.unknown("cache, prefetch, sectors, neighbours, cull");
   });
-  if (c.sectors != 1 && c.sectors < 3)
-    fail("strategy \"" + name + "\"", "sectors must be 1 (position only) or at least 3: with 2, a sector and its neighbours are every direction twice");
+  if (c.cache == LiChiangConfig::Cache::kNone && c.prefetch != LiChiangConfig::Prefetch::kNone)
+    fail("strategy \"" + name + "\"", "cache=none keeps nothing, so it has nowhere to prefetch into; add prefetch=none (the seed's case 1)");
   return c;
 }
 
@@ -53,11 +63,17 @@ namespace {
 
 using Prefetch = LiChiangConfig::Prefetch;
 
+// The configurations' positions are a grid (the relevance matrix's neighbours are grid steps).
 visibility::StoredPvs open_sets(const World& world) {
   if (!world.file().has_section(visibility::kPvsSection))
     fail(world.file().path(), "has no visible sets for lichiang; run `cellwalk pvs " + world.file().path() +
-                                  " --cells grid:SIZE` first (any engine)");
-  return visibility::StoredPvs(world);
+                                  " --cells grid:SIZE` first (any engine but vlod)");
+  visibility::StoredPvs pvs(world);
+  if (pvs.partition().kind() != "grid")
+    fail(world.file().path(), "its visible sets are over " + pvs.partition().kind() +
+                                  " cells, and lichiang's configurations step over a grid; rerun `cellwalk pvs " +
+                                  world.file().path() + " --cells grid:SIZE`");
+  return pvs;
 }
 
 double signed_angle(double a) { return std::remainder(a, 2.0 * std::numbers::pi); }
@@ -66,10 +82,14 @@ double signed_angle(double a) { return std::remainder(a, 2.0 * std::numbers::pi)
 struct PlanKey {
   CellId cell = 0;
   int sector = 0;
+  int octant = 0;      // the heading's nearest grid direction: where the window and one step go
   int shift = 0;       // ⌈ν⌉
   long omega = 0;      // ω in steps of 0.05 rad per frame
   bool operator==(const PlanKey&) const = default;
 };
+
+// The bytes a decoded set of `ids` holds, with its map node.
+uint64_t set_bytes(const std::vector<ObjectId>& ids) { return ids.capacity() * sizeof(ObjectId) + 64; }
 
 }  // namespace
 
@@ -82,14 +102,21 @@ struct LiChiangStrategy::Impl {
         store(w, o.memory_budget_bytes,
               c.cache == LiChiangConfig::Cache::kHybrid ? make_hybrid_relevance_policy() : make_lru_policy(),
               c.prefetch != Prefetch::kNone ? 2 : 1),
-        prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone ? 1u : 0u, size_t(c.in_flight)}) {
+        // One loader thread, one load at a time: the store keeps room for it beside get()'s.
+        prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone ? 1u : 0u, 1}) {
     pvs_bytes = pvs.resident_bytes();
     if (!store.buffer().budget().try_reserve(pvs_bytes))
       fail(w.file().path(), "memory budget of " + byte_size_text(o.memory_budget_bytes) +
                                 " cannot hold the stored visible sets (" + byte_size_text(pvs_bytes) +
                                 ") beside the directory and the loads in flight; give a larger --budget");
   }
-  ~Impl() { store.buffer().budget().release(pvs_bytes + sets_bytes); }
+  // The loader thread stops before the bytes it could admit into are released.
+  ~Impl() {
+    prefetcher.cancel_older_than(UINT64_MAX);
+    if (config.prefetch != Prefetch::kNone) prefetcher.wait_idle();
+    sets.clear();
+    store.buffer().budget().release(pvs_bytes + sets_bytes);
+  }
 
   const World& world;
   LiChiangConfig config;
@@ -97,7 +124,8 @@ struct LiChiangStrategy::Impl {
   visibility::StoredPvs pvs;
   GeometryStore store;
   uint64_t pvs_bytes = 0;
-  // Decoded sets of the cells the last frame used, charged to the budget as sets_bytes.
+  // Decoded sets of the cells the frames draw from, each charged to the budget as it is decoded
+  // (sets_bytes in all); those of cells no frame drew from since are freed at the frame's end.
   std::unordered_map<CellId, std::vector<ObjectId>> sets;
   std::unordered_set<CellId> touched;
   uint64_t sets_bytes = 0;
@@ -112,13 +140,27 @@ struct LiChiangStrategy::Impl {
   Prefetcher prefetcher;                // last: destroyed first, while what its jobs use exists
 
   const ViewCellPartition& cells() const { return pvs.partition(); }
+  // Objects drawn are the most relevant of their frame (w = c).
+  EntryMeta drawn_meta() const { return EntryMeta{.relevance = float(lichiang::RelevanceParams{}.c), .frame = frame}; }
 
+  // Charges `bytes` more, evicting cached geometry if it must.
+  void charge(uint64_t bytes, CellId c) {
+    if (!store.buffer().reserve(bytes))
+      fail("lichiang", "memory budget of " + byte_size_text(options.memory_budget_bytes) + " cannot hold the set of cell " +
+                           std::to_string(c) + " (" + byte_size_text(bytes) + ") beside " + std::to_string(sets.size()) +
+                           " others; give a larger --budget");
+    sets_bytes += bytes;
+  }
+
+  // The stored set of cell `c`, decoded and kept (charged) until no frame draws from it.
   const std::vector<ObjectId>& set_of(CellId c) {
     touched.insert(c);
     auto it = sets.find(c);
     if (it != sets.end()) return it->second;
     std::optional<VisibleSet> s = pvs.set(c);
-    return sets.emplace(c, s ? std::move(s->objects) : std::vector<ObjectId>{}).first->second;
+    std::vector<ObjectId> ids = s ? std::move(s->objects) : std::vector<ObjectId>{};
+    charge(set_bytes(ids), c);
+    return sets.emplace(c, std::move(ids)).first->second;
   }
 
   // The cell `dx`, `dz` cells from the current one along x and z, if it has a set.
@@ -131,29 +173,47 @@ struct LiChiangStrategy::Impl {
     return c;
   }
 
-  // Adds the objects of configuration (c, directions) to `out`, skipping those in `seen`.
-  void add_configuration(CellId c, const lichiang::YawRange& directions, std::vector<ObjectId>& out,
-                         std::unordered_set<ObjectId>& seen) {
+  // Adds the objects of configuration (c, directions) in `ids` to `out`, skipping those in `seen`.
+  void add_configuration(CellId c, const std::vector<ObjectId>& ids, const lichiang::YawRange& directions,
+                         std::vector<ObjectId>& out, std::unordered_set<ObjectId>& seen) const {
     const Aabb& box = cells().cell(c).box;
-    for (ObjectId id : set_of(c))
+    for (ObjectId id : ids)
       if (!seen.contains(id) && lichiang::directions_between(box, world.object(id).bounds).meets(directions)) {
         seen.insert(id);
         out.push_back(id);
       }
   }
+  void add_configuration(CellId c, const lichiang::YawRange& directions, std::vector<ObjectId>& out,
+                         std::unordered_set<ObjectId>& seen) {
+    add_configuration(c, set_of(c), directions, out, seen);
+  }
+  // For planning: the set of a cell the frame does not draw from is decoded, charged while it is
+  // used and freed at once.
+  void add_planned_configuration(CellId c, const lichiang::YawRange& directions, std::vector<ObjectId>& out,
+                                 std::unordered_set<ObjectId>& seen) {
+    if (auto it = sets.find(c); it != sets.end()) return add_configuration(c, it->second, directions, out, seen);
+    std::optional<VisibleSet> s = pvs.set(c);
+    if (!s) return;
+    const uint64_t bytes = set_bytes(s->objects);
+    charge(bytes, c);
+    add_configuration(c, s->objects, directions, out, seen);
+    store.buffer().budget().release(bytes);
+    sets_bytes -= bytes;
+  }
 
-  // Frees the decoded sets no configuration of this frame used and charges the rest.
+  // Frees the decoded sets no frame drew from this time.
   void settle_sets() {
-    std::erase_if(sets, [&](const auto& entry) { return !touched.contains(entry.first); });
+    for (auto it = sets.begin(); it != sets.end();) {
+      if (touched.contains(it->first)) {
+        ++it;
+        continue;
+      }
+      const uint64_t bytes = set_bytes(it->second);
+      it = sets.erase(it);
+      store.buffer().budget().release(bytes);
+      sets_bytes -= bytes;
+    }
     touched.clear();
-    uint64_t bytes = 0;
-    for (const auto& [c, ids] : sets) bytes += ids.capacity() * sizeof(ObjectId) + 32;
-    store.buffer().budget().release(sets_bytes);
-    sets_bytes = 0;
-    if (!store.buffer().reserve(bytes))
-      fail("lichiang", "memory budget of " + byte_size_text(options.memory_budget_bytes) + " cannot hold the sets of " +
-                           std::to_string(sets.size()) + " cells (" + byte_size_text(bytes) + "); give a larger --budget");
-    sets_bytes = bytes;
   }
 
   // The union of the sets of the current configuration's 1-neighbours (or its own set).
@@ -184,10 +244,10 @@ struct LiChiangStrategy::Impl {
   // requests not yet started are dropped then.
   void plan_prefetch(const std::vector<ObjectId>& drawn, double nu, double omega, double yaw,
                      std::optional<double> margin, uint64_t frame) {
-    const PlanKey key{*cell, sector, nu > 0 ? int(std::ceil(nu)) : 0, std::lround(omega / 0.05)};
+    const int octant = int(std::lround(yaw / (std::numbers::pi / 4.0))) & 7;
+    const PlanKey key{*cell, sector, octant, nu > 0 ? int(std::ceil(nu)) : 0, std::lround(omega / 0.05)};
     if (planned == key) return;
-    planned = key;
-    ++counters.plans;
+    planned.reset();  // set again once the plan is whole
     prefetcher.cancel_older_than(frame);
     std::unordered_set<ObjectId> seen(drawn.begin(), drawn.end());
     const lichiang::YawRange directions = lichiang::sector_range(sector, 1, config.sectors, margin);
@@ -197,17 +257,19 @@ struct LiChiangStrategy::Impl {
         const std::optional<CellId> c = offset_cell(e.dx, e.dz);
         if (!c) continue;
         ids.clear();
-        add_configuration(*c, directions, ids, seen);
+        add_planned_configuration(*c, directions, ids, seen);
         for (ObjectId id : ids) submit(id, e.w, frame);
       }
     } else {  // one step: the configuration the viewer moves into next, and its 1-neighbours
-      const double step = std::max(1, key.shift);
-      const int sx = int(std::lround(-std::sin(yaw) * step)), sz = int(std::lround(-std::cos(yaw) * step));
+      const double heading = octant * std::numbers::pi / 4.0, step = std::max(1, key.shift);
+      const int sx = int(std::lround(-std::sin(heading))) * int(step), sz = int(std::lround(-std::cos(heading))) * int(step);
       for (int dx = -1; dx <= 1; ++dx)
         for (int dz = -1; dz <= 1; ++dz)
-          if (const std::optional<CellId> c = offset_cell(sx + dx, sz + dz)) add_configuration(*c, directions, ids, seen);
+          if (const std::optional<CellId> c = offset_cell(sx + dx, sz + dz)) add_planned_configuration(*c, directions, ids, seen);
       for (ObjectId id : ids) submit(id, 0.0, frame);
     }
+    planned = key;
+    ++counters.plans;
   }
 };
 
@@ -225,7 +287,6 @@ std::string LiChiangStrategy::name() const {
   if (c.prefetch != d.prefetch) add(std::string("prefetch=") + (c.prefetch == Prefetch::kNone ? "none" : "one-step"));
   if (c.sectors != d.sectors) add("sectors=" + std::to_string(c.sectors));
   if (c.neighbours != d.neighbours) add("neighbours=0");
-  if (c.in_flight != d.in_flight) add("in_flight=" + std::to_string(c.in_flight));
   if (c.cull != d.cull) add("cull=0");
   return s.empty() ? "lichiang" : "lichiang:" + s;
 }
@@ -236,6 +297,7 @@ void LiChiangStrategy::select(const Camera& camera, std::vector<DrawItem>& items
   Impl& s = *impl_;
   const uint64_t frame = s.frame = s.counters.frames++;
   if (s.config.cache == LiChiangConfig::Cache::kNone) {
+    s.current.reset();  // held, it could not be erased
     for (CacheKey key : s.used) s.store.buffer().erase(key);
     s.used.clear();
   }
@@ -264,6 +326,8 @@ void LiChiangStrategy::select(const Camera& camera, std::vector<DrawItem>& items
   if (s.cell) {
     const std::vector<ObjectId> drawn = s.drawn_set(margin);
     for (ObjectId id : drawn) add(id);
+    // What this frame draws ranks above anything the loader thread brings meanwhile.
+    for (const DrawItem& item : items) s.store.buffer().touch(GeometryStore::key(item.id, item.lod), s.drawn_meta());
     if (s.config.prefetch != Prefetch::kNone) s.plan_prefetch(drawn, nu, omega, yaw, margin, frame);
   } else {
     for (ObjectId id = 0; id < s.world.object_count(); ++id)
@@ -279,8 +343,7 @@ const Mesh* LiChiangStrategy::mesh(const DrawItem& item, FrameStats& stats) {
   Impl& s = *impl_;
   s.current.reset();  // the renderer has uploaded it: let the store evict it
   const uint64_t misses = stats.cache_misses;
-  const EntryMeta meta{.relevance = float(lichiang::RelevanceParams{}.c), .frame = s.frame};
-  s.current = s.store.get(item.id, item.lod, meta, stats);
+  s.current = s.store.get(item.id, item.lod, s.drawn_meta(), stats);
   stats.stall = stats.stall || stats.cache_misses > misses;
   if (s.config.cache == LiChiangConfig::Cache::kNone) s.used.push_back(GeometryStore::key(item.id, item.lod));
   return s.current.get();

@@ -6,7 +6,7 @@
 // thread in relevance order (t_p: it runs while the frame draws, and what it has not started
 // when the viewer's configuration or motion changes is dropped, with a bound on loads in
 // flight). The cache is LRU across frames and by relevance within one ("Hybrid Cache Model").
-// The sets are the stored from-region sets of `cellwalk pvs` (any engine, any cells).
+// The sets are the stored from-region sets of `cellwalk pvs` over grid cells (any engine but vlod).
 #pragma once
 
 #include <cstdint>
@@ -18,13 +18,13 @@
 namespace cellwalk {
 
 // Name: "lichiang[:key=value,...]" with keys
-//   cache=hybrid       hybrid (LRU across frames, relevance within one), lru, or none (nothing is
-//                      kept from one frame to the next: the seed's case 1)
+//   cache=hybrid       hybrid (LRU across frames, relevance within one; a prefetch evicts only
+//                      what that order puts before it), lru, or none (nothing is kept from one
+//                      frame to the next: the seed's case 1, with prefetch=none)
 //   prefetch=relevance relevance (the relevance matrix's window, most relevant first), one-step
 //                      (the configuration the viewer moves into next, [Chim 98]), or none
 //   sectors=8          orientation sectors of a configuration (1: position only)
 //   neighbours=1       draw the union of the 1-neighbours' sets, as the seed (0: the own set)
-//   in_flight=2        prefetch loads at once (the bound on outstanding requests)
 //   cull=1             frustum-cull what is drawn (0: draw the whole union)
 // The seed's four cases: cache=none,prefetch=none; cache=lru,prefetch=none;
 // cache=lru,prefetch=one-step; cache=hybrid,prefetch=relevance (the default).
@@ -35,7 +35,6 @@ struct LiChiangConfig {
   Prefetch prefetch = Prefetch::kRelevance;
   int sectors = 8;
   bool neighbours = true;
-  int in_flight = 2;
   bool cull = true;
 };
 bool is_lichiang_strategy_name(const std::string& name);
@@ -52,8 +51,8 @@ struct LiChiangCounters {
 
 class LiChiangStrategy : public Strategy {
  public:
-  // Throws Error if the world has no stored sets (naming the command that makes them), or the
-  // budget cannot hold them beside the directory and the loads in flight.
+  // Throws Error if the world has no stored sets over a grid (naming the command that makes
+  // them), or the budget cannot hold them beside the directory and the loads in flight.
   LiChiangStrategy(const World& world, const LiChiangConfig& config, const StrategyOptions& options);
   ~LiChiangStrategy() override;
   std::string name() const override;
