@@ -3,10 +3,12 @@
 // visible object drawn, the budget held, the seed's four cases run.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <numeric>
 #include <set>
 
 #include <nlohmann/json.hpp>
@@ -204,6 +206,18 @@ TEST(LiChiangName, ParsesTheFourCasesAndRefusesTheRest) {
     EXPECT_THROW(parse_lichiang_strategy_name(bad), Error) << bad;
 }
 
+// t_p on the frame's thread (the seed's frame cycle): a fixed allowance or a frame budget.
+TEST(LiChiangName, PrefetchTimeInTheFrameCycle) {
+  EXPECT_FALSE(parse_lichiang_strategy_name("lichiang").prefetch_in_frame());
+  const LiChiangConfig t = parse_lichiang_strategy_name("lichiang:tp_ms=2.5");
+  EXPECT_TRUE(t.prefetch_in_frame());
+  EXPECT_EQ(t.tp_ms, 2.5);
+  EXPECT_EQ(parse_lichiang_strategy_name("lichiang:cache=lru,prefetch=one-step,frame_ms=100").frame_ms, 100.0);
+  for (const char* bad : {"lichiang:tp_ms=-1", "lichiang:tp_ms=x", "lichiang:tp_ms=2,frame_ms=30",
+                          "lichiang:cache=lru,prefetch=none,tp_ms=5", "lichiang:cache=none,prefetch=none,frame_ms=5"})
+    EXPECT_THROW(parse_lichiang_strategy_name(bad), Error) << bad;
+}
+
 nlohmann::json summary_of(const test::CommandResult& r) {
   const size_t start = r.output.find('{');
   return start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.output.substr(start), nullptr, false);
@@ -215,12 +229,14 @@ class LiChiangSystem : public ::testing::Test {
     dir_ = new test::TempDir;
     world_ = dir_->file("city.cww");
     path_ = dir_->file("city.path");
+    far_path_ = dir_->file("far.path");
     bare_ = dir_->file("bare.cww");
     for (const std::string& command : {"generate city --objects 150 --landmark-fraction 0.2 --seed 6 -o " + dir_->file("city.cwscene"),
                                        "build " + dir_->file("city.cwscene") + " -o " + world_,
                                        "build " + dir_->file("city.cwscene") + " -o " + bare_,
                                        "pvs " + world_ + " --engine conservative --cells grid:25",
-                                       "path " + world_ + " --frames 60 --seed 4 -o " + path_}) {
+                                       "path " + world_ + " --frames 60 --seed 4 -o " + path_,
+                                       "path " + world_ + " --kind fast --frames 400 --seed 4 -o " + far_path_}) {
       const test::CommandResult r = test::run_cellwalk(command);
       ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
     }
@@ -228,6 +244,7 @@ class LiChiangSystem : public ::testing::Test {
   static void TearDownTestSuite() { delete dir_; }
   static inline test::TempDir* dir_ = nullptr;
   static inline std::string world_, bare_, path_;  // bare_: the same world without sets
+  static inline std::string far_path_;             // through several cells
 };
 
 // Without sets the strategy names the command; with them, every visible object is drawn, in
@@ -302,6 +319,51 @@ TEST_F(LiChiangSystem, TheFourCasesHoldTheBudget) {
   EXPECT_GT(none["total_bytes_read"].get<uint64_t>(), lru["total_bytes_read"].get<uint64_t>());
 }
 
+// Frames by hand (no renderer: every item drawn asks the store): the misses of each frame.
+struct InFrameWalk {
+  std::vector<uint64_t> misses;
+  LiChiangCounters counters;
+  uint64_t stall_frames() const { return uint64_t(std::count_if(misses.begin(), misses.end(), [](uint64_t m) { return m > 0; })); }
+  uint64_t total() const { return std::accumulate(misses.begin(), misses.end(), uint64_t(0)); }
+};
+
+InFrameWalk walk_in_process(const World& world, const CameraPath& path, const std::string& name) {
+  LiChiangStrategy strategy(world, parse_lichiang_strategy_name(name), StrategyOptions{});
+  InFrameWalk w;
+  std::vector<DrawItem> items;
+  Camera camera;
+  for (const PathFrame& f : path.frames) {
+    apply(f, camera);
+    FrameStats stats;
+    strategy.select(camera, items, stats);
+    for (const DrawItem& item : items) EXPECT_NE(strategy.mesh(item, stats), nullptr);
+    w.misses.push_back(stats.cache_misses);
+  }
+  w.counters = strategy.counters();
+  return w;
+}
+
+// In the seed's cycle, no prefetch time is no prefetching: frame for frame the same misses as
+// the case without it. Time enough to load each plan whole leaves fewer misses, and no more
+// stall frames.
+TEST_F(LiChiangSystem, PrefetchTimeInTheFrameIsWhatPrefetchingGets) {
+  const World world(world_);
+  const CameraPath path = read_path(far_path_);
+  const InFrameWalk none = walk_in_process(world, path, "lichiang:cache=lru,prefetch=none");
+  const InFrameWalk zero = walk_in_process(world, path, "lichiang:cache=lru,prefetch=one-step,tp_ms=0");
+  EXPECT_EQ(zero.misses, none.misses);
+  EXPECT_GT(zero.counters.prefetch_requests, 0u);  // planned, never given time
+  EXPECT_GT(none.total(), 0u);
+  for (const std::string name : {"lichiang:tp_ms=100000", "lichiang:frame_ms=100000"}) {
+    SCOPED_TRACE(name);
+    const InFrameWalk ample = walk_in_process(world, path, name);
+    EXPECT_GT(ample.counters.prefetch_ms, 0.0);
+    EXPECT_LT(ample.total(), none.total());
+    EXPECT_LE(ample.stall_frames(), none.stall_frames());
+    EXPECT_EQ(ample.misses.front(), none.misses.front());  // nothing is prefetched before the first frame
+  }
+}
+
 // The bench on a tiny city: its report and CSV are written; with the cache as large as the
 // world, the caching cases read each object once and no case passes its budget; without a
 // cache every frame reads again.
@@ -317,6 +379,10 @@ TEST(LiChiangBench, WritesItsReportAndTheCasesBehave) {
   p.height = 48;
   p.out_dir = dir.file("results");
   p.work_dir = dir.file("work");
+  p.disks = {"slow"};
+  p.read_latency_ms = 0.2;
+  p.plot_fractions = {1.0};
+  p.plot_tp_ms = {0.0, 1000.0};
   p.command_line = "cellwalk bench lichiang --objects 40";
   const nlohmann::ordered_json s = run_lichiang_bench(p);
   const std::vector<uint8_t> bytes = test::slurp(dir.file("results/lichiang.md"));
@@ -325,8 +391,12 @@ TEST(LiChiangBench, WritesItsReportAndTheCasesBehave) {
   EXPECT_NE(md.find("## Target"), std::string::npos);
   EXPECT_GT(std::filesystem::file_size(dir.file("results/lichiang/cases.csv")), 0u);
   EXPECT_EQ(s["over_budget"].get<int>(), 0);
-  EXPECT_EQ(s["compared"].get<int>(), 1);
-  const auto& cases = s["40 objects"]["100.0"]["normal"];
+  EXPECT_EQ(s["compared"].get<int>(), 2);  // the page cache, and the slow disk
+  EXPECT_EQ(s["tp_walks"].get<int>(), 2);
+  EXPECT_GT(std::filesystem::file_size(dir.file("results/lichiang/tp-stalls.svg")), 0u);
+  EXPECT_NE(md.find("allowable prefetching time"), std::string::npos);
+  EXPECT_NE(md.find("+0.2 ms a read"), std::string::npos);
+  const auto& cases = s["40 objects"]["page cache"]["100.0"]["normal"];
   ASSERT_EQ(cases.size(), lichiang_cases().size());
   const uint64_t lru = cases["lichiang:cache=lru,prefetch=none"]["bytes_read"].get<uint64_t>();
   EXPECT_GT(lru, 0u);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -83,6 +84,23 @@ TEST(PageFile, ReadsExactlyWhatIfstreamReadsAndCountsExactly) {
     EXPECT_EQ(file.counters().requests, 0u);
     EXPECT_EQ(file.counters().bytes, 0u);
   }
+}
+
+// A slow disk (issue 18's experiments): the same bytes, and every read system call waits at
+// least the latency first (a lower bound only: a sleep never ends early).
+TEST(PageFile, InjectedLatencyDelaysEveryReadAndChangesNoByte) {
+  test::TempDir dir;
+  const std::string path = write_file(dir.file("slow"), random_bytes(4096 * 16, 9));
+  PageFile file(path, {.page_size = 4096, .bypass_cache = false, .read_latency_us = 4000});
+  expect_reads_match(file, path, 3, 10);
+  const uint64_t calls = file.counters().syscalls;
+  EXPECT_GE(calls, 10u);
+  std::vector<char> page(4096);
+  const auto start = std::chrono::steady_clock::now();
+  for (int i = 0; i < 5; ++i) file.read(uint64_t(i), 1, page.data());
+  const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_GE(ms, 5 * 4.0);
+  EXPECT_EQ(file.counters().syscalls, calls + 5);
 }
 
 // O_DIRECT where the file system takes it, else drop-behind; either way the bytes are exact.

@@ -87,6 +87,25 @@ TEST(Prefetcher, DeterministicModeRunsHighestPriorityFirst) {
   for (CacheKey key : {1, 2, 3, 4, 5}) EXPECT_TRUE(cache.contains(key));
 }
 
+// Li & Chiang's t_p: the loads of one frame fit the time it allows. With 10 ms loads and 35 ms
+// allowed, four start (the fourth while 30 ms have passed) and the rest wait, highest first.
+TEST(Prefetcher, StepForRunsWhatTheTimeAllowsHighestFirst) {
+  MemoryBudget budget;
+  BufferManager cache(budget, make_lru_policy());
+  Prefetcher prefetcher(cache, {.threads = 0});
+  Recorder r;
+  r.delay = std::chrono::milliseconds(10);
+  for (CacheKey key = 0; key < 12; ++key) prefetcher.submit(request(r, key, double(key)));
+  EXPECT_EQ(prefetcher.step_for(0.0), 0u);
+  const size_t ran = prefetcher.step_for(35.0);
+  EXPECT_GE(ran, 1u);
+  EXPECT_LE(ran, 4u);  // a sleep never ends early, so a fifth load cannot start before 40 ms
+  EXPECT_EQ(prefetcher.queued(), 12u - ran);
+  for (size_t i = 0; i < ran; ++i) EXPECT_EQ(r.loaded[i], CacheKey(11 - i));
+  r.delay = std::chrono::milliseconds(0);
+  EXPECT_EQ(prefetcher.step_for(1e9), 12u - ran);  // an idle queue ends the step at once
+}
+
 TEST(Prefetcher, CancellationStopsUselessLoads) {
   MemoryBudget budget;
   BufferManager cache(budget, make_lru_policy());

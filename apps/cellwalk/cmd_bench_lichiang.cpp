@@ -17,6 +17,7 @@ void register_bench_lichiang(CLI::App& bench, std::string (*command_line)()) {
   struct Args {
     LiChiangBenchParams params;
     bool json = false;
+    bool no_plot = false;
   };
   auto args = std::make_shared<Args>();
   LiChiangBenchParams& p = args->params;
@@ -29,6 +30,11 @@ void register_bench_lichiang(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--frames", p.frames, "Frames of each path")->capture_default_str()->check(integer_in(2, 100000));
   cmd->add_option("--path-seed", p.path_seed, "The paths' seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--cache-fraction", p.cache_fractions, "The cache shares of the budget, as fractions of the world's geometry")->capture_default_str()->check(number_in(1e-6, 1));
+  cmd->add_option("--disk", p.disks, "Storage the cases also run on, each world's first path: direct (page cache bypassed), slow (bypassed, with --read-latency-ms)")->capture_default_str()->check(CLI::IsMember({"cached", "direct", "slow"}));
+  cmd->add_option("--read-latency-ms", p.read_latency_ms, "The slow disk's wait before every read, ms")->capture_default_str()->check(number_in(0, 1000));
+  cmd->add_option("--plot-fraction", p.plot_fractions, "Cache shares of the cache-size against prefetch-time plot")->capture_default_str()->check(number_in(1e-6, 1));
+  cmd->add_option("--plot-tp", p.plot_tp_ms, "Allowable prefetching times t_p of that plot, ms a frame")->capture_default_str()->check(number_in(0, 1e6));
+  cmd->add_flag("--no-plot", args->no_plot, "Skip the cache-size against prefetch-time plot");
   cmd->add_option("--gpu-budget", p.gpu_mib, "The renderer's buffer cache, MiB")->capture_default_str()->check(number_in(0, 65536));
   cmd->add_option("--width", p.width, "Image width")->capture_default_str()->check(integer_in(16, 4096));
   cmd->add_option("--height", p.height, "Image height")->capture_default_str()->check(integer_in(16, 4096));
@@ -38,6 +44,7 @@ void register_bench_lichiang(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_flag("--json", args->json, "Print the summary as JSON");
   cmd->callback([args, command_line] {
     args->params.command_line = command_line();
+    if (args->no_plot) args->params.plot_fractions.clear();
     const nlohmann::ordered_json summary = run_lichiang_bench(args->params);
     if (args->json) {
       std::printf("%s\n", summary.dump(2).c_str());

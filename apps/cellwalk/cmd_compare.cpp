@@ -102,7 +102,7 @@ void register_compare(CLI::App& root) {
   cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str()->check(integer_in(0, 100000));
   cmd->callback([args] {
     args->check_strategies();
-    World world(args->world);
+    World world(args->world, args->world_options());
     const CameraPath path = args->read_checked_path(world);
     const OutputFolder folder = args->make_output_folder();
     auto context = GlContext::headless();

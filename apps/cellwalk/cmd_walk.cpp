@@ -82,7 +82,7 @@ void register_walk(CLI::App& root) {
     // The baseline is measured before the world and the path are read: they are charged.
     auto context = GlContext::headless();
     const uint64_t baseline = measure_baseline(args->lens.render_settings());
-    const World world(args->world);
+    const World world(args->world, args->world_options());
     const CameraPath path = args->read_checked_path(world);
     const RunBudget budget = args->run_budget(path.frames.size());
     std::vector<std::string> labels;

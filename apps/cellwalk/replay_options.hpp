@@ -29,6 +29,8 @@ struct ReplayOptions {
   uint64_t polygon_budget = 20000;
   bool no_dov_levels = false;
   bool json = false;
+  bool bypass_cache = false;
+  double read_latency_ms = 0;
   LensOptions lens;
 
   void add_to(CLI::App& cmd, const std::string& default_out) {
@@ -49,7 +51,15 @@ struct ReplayOptions {
     cmd.add_option("--polygon-budget", polygon_budget, "hdov-pb: triangles per frame (HDoV thesis §6.1.2)")->capture_default_str()->check(integer_in(1, 1000000000));
     cmd.add_flag("--no-dov-levels", no_dov_levels, "hdov-vsc, hdov-pb: no level lowered by DoV (eq. 5.6, PB's λ)");
     cmd.add_flag("--json", json, "Print the summary as JSON");
+    cmd.add_flag("--bypass-cache", bypass_cache, "Read the world around the OS page cache (O_DIRECT, else drop-behind)");
+    cmd.add_option("--read-latency-ms", read_latency_ms, "A slow disk: wait this long before every read of the world, ms")
+        ->capture_default_str()
+        ->check(number_in(0, 1000));
     lens.add_to(cmd);
+  }
+  // How the world is opened: through the page cache or around it, at the disk's speed or slower.
+  WorldFile::Options world_options() const {
+    return {.bypass_cache = bypass_cache, .read_latency_us = static_cast<uint32_t>(read_latency_ms * 1000.0 + 0.5)};
   }
   // The checks of a replay before any work: the lens, an output folder that is not an input
   // file, and the path's world (a warning: a path may be reused on purpose).

@@ -23,6 +23,7 @@
 #include "core/progress.hpp"
 #include "experiments/common/bench_support.hpp"
 #include "experiments/common/bench_world.hpp"
+#include "experiments/common/svg_plot.hpp"
 #include "precompute/pvs_builder.hpp"
 
 namespace cellwalk {
@@ -37,7 +38,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using bench::fixed;
-using bench::Table;
 using Json = nlohmann::ordered_json;
 
 constexpr double kMiB = 1048576.0;
@@ -110,9 +110,10 @@ BenchWorld prepare(const LiChiangBenchParams& p, const bench::WorkDir& dir, uint
 
 struct CaseRun {
   std::string strategy;
-  double mean_ms = 0, sd_ms = 0;
-  uint64_t hits = 0, misses = 0, stalls = 0, bytes_read = 0, peak = 0, prefetches = 0;
+  double mean_ms = 0, sd_ms = 0, prefetch_ms = 0;
+  uint64_t hits = 0, misses = 0, stalls = 0, bytes_read = 0, peak = 0, prefetches = 0, frames = 0;
   double hit_ratio() const { return hits + misses ? double(hits) / double(hits + misses) : 0.0; }
+  double stall_share() const { return frames ? double(stalls) / double(frames) : 0.0; }
 };
 
 CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& world, const CameraPath& path,
@@ -133,6 +134,7 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
   progress.finish();
   CaseRun r;
   r.strategy = strategy_name;
+  r.frames = frames.size();
   std::vector<double> ms;
   for (const FrameStats& f : frames) {
     ms.push_back(f.frame_ms);
@@ -144,67 +146,119 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
   r.mean_ms = bench::mean(ms);
   r.sd_ms = std::sqrt(bench::variance(ms));
   r.peak = strategy->peak_resident_bytes();
-  if (const auto* lc = dynamic_cast<const LiChiangStrategy*>(strategy.get())) r.prefetches = lc->counters().prefetch_requests;
+  if (const auto* lc = dynamic_cast<const LiChiangStrategy*>(strategy.get())) {
+    r.prefetches = lc->counters().prefetch_requests;
+    r.prefetch_ms = lc->counters().prefetch_ms;
+  }
   return r;
 }
 
-const std::vector<std::string> kCasesHeader = {"world", "cache % of world", "path", "case", "frame ms mean", "sd", "hit ratio %", "stall frames",
-                                               "stall %", "MiB read", "prefetch requests", "peak / budget MiB"};
+// Where the walks read the world from: the file through the OS page cache ("cached"), around
+// it ("direct": O_DIRECT, or drop-behind where the file system refuses it), or around it with
+// a latency before every read ("slow").
+WorldFile::Options disk_options(const std::string& disk, double latency_ms) {
+  if (disk == "cached") return {};
+  if (disk == "direct") return {.bypass_cache = true};
+  if (disk == "slow") return {.bypass_cache = true, .read_latency_us = uint32_t(std::lround(latency_ms * 1000.0))};
+  fail("bench lichiang", "unknown --disk \"" + disk + "\" (cached, direct, slow)");
+}
 
-}  // namespace
+std::string disk_label(const std::string& disk, double latency_ms) {
+  if (disk == "direct") return "page cache bypassed";
+  if (disk == "slow") return "bypassed, +" + fixed(latency_ms, 1) + " ms a read";
+  return "page cache";
+}
 
-Json run_lichiang_bench(const LiChiangBenchParams& p) {
-  if (p.world_objects.empty() || p.path_kinds.empty()) fail("bench lichiang", "give at least one --objects and one --path");
-  if (p.cache_fractions.empty()) fail("bench lichiang", "give at least one --cache-fraction");
-  for (const double f : p.cache_fractions)
-    if (!(f > 0.0 && f <= 1.0)) fail("bench lichiang", "--cache-fraction " + fixed(f, 3) + " is not in (0, 1]");
-  for (const std::string& kind : p.path_kinds) parse_session_kind(kind);
-  const auto start = bench::Clock::now();
-  const bench::WorkDir dir(p.work_dir, "lichiang");
-  std::vector<BenchWorld> worlds;
-  for (const uint64_t n : p.world_objects) worlds.push_back(prepare(p, dir, n));
+const std::vector<std::string> kCasesHeader = {"world", "storage", "cache % of world", "path", "case", "frame ms mean", "sd",
+                                               "hit ratio %", "stall frames", "stall %", "MiB read", "prefetch requests",
+                                               "peak / budget MiB"};
 
-  const std::unique_ptr<GlContext> context = GlContext::headless();
-  Table rows;
-  Json summary = Json::object();
+// The walks' tables and the target's tally, as they are run.
+struct Results {
+  bench::Table cases, tp;
+  nlohmann::ordered_json summary = nlohmann::ordered_json::object();
   int compared = 0, beaten = 0, over_budget = 0;
   std::string target_rows;
-  for (const BenchWorld& w : worlds) {
-    const World world(w.file);
-    for (const double fraction : p.cache_fractions) {
-      const uint64_t budget = w.fixed_bytes + uint64_t(fraction * double(w.geometry_bytes));
-      const std::string share = fixed(100 * fraction, 1);
-      for (const std::string& kind : p.path_kinds) {
-        std::vector<CaseRun> runs;
-        for (const std::string& c : lichiang_cases())
-          runs.push_back(walk_case(p, budget, world, w.paths.at(kind), c, w.name + ", " + share + " %, " + kind + ", " + c));
-        for (const CaseRun& r : runs) {
-          rows.push_back({w.name, share, kind, r.strategy, fixed(r.mean_ms, 1), fixed(r.sd_ms, 1), fixed(100 * r.hit_ratio(), 2),
-                          std::to_string(r.stalls), fixed(100.0 * double(r.stalls) / double(p.frames), 2),
-                          fixed(double(r.bytes_read) / kMiB, 1), std::to_string(r.prefetches),
-                          fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
-          summary[w.name][share][kind][r.strategy] = {{"frame_ms", r.mean_ms}, {"sd_ms", r.sd_ms}, {"hit_ratio", r.hit_ratio()},
-                                                      {"stall_frames", r.stalls}, {"bytes_read", r.bytes_read},
-                                                      {"peak_bytes", r.peak}, {"budget_bytes", budget}};
-          over_budget += r.peak > budget;
-        }
-        const CaseRun &one_step = runs[2], &hybrid = runs[3];
-        const bool beats = hybrid.stalls <= one_step.stalls && hybrid.hit_ratio() >= one_step.hit_ratio() &&
-                           (hybrid.stalls < one_step.stalls || hybrid.hit_ratio() > one_step.hit_ratio());
-        ++compared;
-        beaten += beats;
-        target_rows += "| " + w.name + " | " + share + " | " + kind + " | " + std::to_string(one_step.stalls) + " → " +
-                       std::to_string(hybrid.stalls) + " | " + fixed(100 * one_step.hit_ratio(), 2) + " → " +
-                       fixed(100 * hybrid.hit_ratio(), 2) + " | " + (beats ? "yes" : "**no**") + " |\n";
-      }
+  std::map<std::string, PlotSeries> tp_stalls, tp_hits, tp_frame;  // by cache share
+};
+
+uint64_t budget_of(const BenchWorld& w, double fraction) { return w.fixed_bytes + uint64_t(fraction * double(w.geometry_bytes)); }
+
+void add_case_row(Results& out, const BenchWorld& w, const std::string& storage, const std::string& share, const std::string& kind,
+                  const CaseRun& r, uint64_t budget) {
+  out.cases.push_back({w.name, storage, share, kind, r.strategy, fixed(r.mean_ms, 1), fixed(r.sd_ms, 1), fixed(100 * r.hit_ratio(), 2),
+                       std::to_string(r.stalls), fixed(100.0 * r.stall_share(), 2), fixed(double(r.bytes_read) / kMiB, 1),
+                       std::to_string(r.prefetches), fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
+  out.summary[w.name][storage][share][kind][r.strategy] = {
+      {"frame_ms", r.mean_ms}, {"sd_ms", r.sd_ms}, {"hit_ratio", r.hit_ratio()}, {"stall_frames", r.stalls},
+      {"bytes_read", r.bytes_read}, {"peak_bytes", r.peak}, {"budget_bytes", budget}};
+  out.over_budget += r.peak > budget;
+}
+
+// The seed's four cases on one path; the target compares case 4 with case 3.
+void walk_cases(const LiChiangBenchParams& p, const BenchWorld& w, const World& world, const std::string& storage, double fraction,
+                const std::string& kind, Results& out) {
+  const uint64_t budget = budget_of(w, fraction);
+  const std::string share = fixed(100 * fraction, 1);
+  std::vector<CaseRun> runs;
+  for (const std::string& c : lichiang_cases()) {
+    runs.push_back(walk_case(p, budget, world, w.paths.at(kind), c, w.name + ", " + storage + ", " + share + " %, " + kind + ", " + c));
+    add_case_row(out, w, storage, share, kind, runs.back(), budget);
+  }
+  const CaseRun &one_step = runs[2], &hybrid = runs[3];
+  const bool beats = hybrid.stalls <= one_step.stalls && hybrid.hit_ratio() >= one_step.hit_ratio() &&
+                     (hybrid.stalls < one_step.stalls || hybrid.hit_ratio() > one_step.hit_ratio());
+  ++out.compared;
+  out.beaten += beats;
+  out.target_rows += "| " + w.name + " | " + storage + " | " + share + " | " + kind + " | " + std::to_string(one_step.stalls) +
+                     " → " + std::to_string(hybrid.stalls) + " | " + fixed(100 * one_step.hit_ratio(), 2) + " → " +
+                     fixed(100 * hybrid.hit_ratio(), 2) + " | " + (beats ? "yes" : "**no**") + " |\n";
+}
+
+// The seed's future work: case 4 with t_p on the frame's thread, over cache shares × t_p.
+void walk_tp_grid(const LiChiangBenchParams& p, const BenchWorld& w, const World& world, const std::string& storage, Results& out) {
+  const std::string& kind = p.path_kinds.front();
+  for (const double fraction : p.plot_fractions) {
+    const uint64_t budget = budget_of(w, fraction);
+    const std::string share = fixed(100 * fraction, 1);
+    for (const double tp : p.plot_tp_ms) {
+      const std::string name = "lichiang:tp_ms=" + fixed(tp, tp == std::floor(tp) ? 0 : 2);
+      const CaseRun r = walk_case(p, budget, world, w.paths.at(kind), name, w.name + ", " + storage + ", " + share + " %, t_p " + fixed(tp, 1) + " ms");
+      out.tp.push_back({w.name, storage, share, kind, fixed(tp, 1), fixed(r.mean_ms, 1), fixed(r.sd_ms, 1),
+                        fixed(r.frames ? r.prefetch_ms / double(r.frames) : 0.0, 2), fixed(100 * r.hit_ratio(), 2),
+                        std::to_string(r.stalls), fixed(100.0 * r.stall_share(), 2),
+                        fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
+      out.over_budget += r.peak > budget;
+      const std::string series = share + " % cache";
+      out.tp_stalls[share].name = out.tp_hits[share].name = out.tp_frame[share].name = series;
+      out.tp_stalls[share].points.push_back({tp, 100.0 * r.stall_share()});
+      out.tp_hits[share].points.push_back({tp, 100.0 * r.hit_ratio()});
+      out.tp_frame[share].points.push_back({tp, r.mean_ms});
     }
   }
-  const fs::path out = fs::path(p.out_dir), sub = out / "lichiang";
-  fs::create_directories(sub);
-  bench::write_csv(sub / "cases.csv", kCasesHeader, rows);
+}
 
+const std::vector<std::string> kTpHeader = {"world", "storage", "cache % of world", "path", "t_p ms allowed", "frame ms mean", "sd",
+                                            "t_p ms used a frame", "hit ratio %", "stall frames", "stall %", "peak / budget MiB"};
+
+void write_plot(const fs::path& file, const std::string& title, const std::string& y_label,
+                const std::map<std::string, PlotSeries>& series, double y_max) {
+  LinePlot plot;
+  plot.title = title;
+  plot.x_label = "allowable prefetching time t_p, ms a frame";
+  plot.y_label = y_label;
+  plot.y_min = 0.0;
+  plot.y_max = y_max;
+  std::vector<std::pair<double, PlotSeries>> ordered;  // by cache share, not by its text
+  for (const auto& [share, s] : series) ordered.emplace_back(std::stod(share), s);
+  std::sort(ordered.begin(), ordered.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  for (auto& [share, s] : ordered) plot.series.push_back(s);
+  write_file_atomically(file.string(), render_svg(plot));
+}
+
+std::string report(const LiChiangBenchParams& p, const std::vector<BenchWorld>& worlds, const Results& r, double minutes) {
   std::string md = "# Li & Chiang: the four cases (seed 003, \"Experimental Results\")\n\n";
-  md += "Generated by `" + p.command_line + "` on " + bench::utc_now() + " in " + fixed(bench::seconds_since(start) / 60.0, 1) +
+  md += "Generated by `" + p.command_line + "` on " + bench::utc_now() + " in " + fixed(minutes, 1) +
         " min; machine: " + bench::machine_info().dump() + ". Every figure comes from this one run.\n\n";
   md += "Worlds: generated cities (houses and towers, landmark fraction " + fixed(p.landmark_fraction, 2) + ", seed " +
         std::to_string(p.city_seed) + "); the seed's two worlds had 128 and 370 objects. Visible sets: the conservative "
@@ -213,7 +267,9 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
         " (the seed's were 1,068 and 1,780 steps from a path planner). Images " + std::to_string(p.width) + "×" +
         std::to_string(p.height) + " on llvmpipe; the renderer's buffer cache is held to " + fixed(p.gpu_mib, 1) +
         " MiB so the store is what caches. The budget of every case is the strategy's fixed parts (directory, room for two "
-        "loads, the stored sets, the sets of the cells in use) plus a cache share, a fraction of the world's decoded geometry; each case walks on its own, with a fresh strategy and renderer.\n\n";
+        "loads, the stored sets, the sets of the cells in use) plus a cache share, a fraction of the world's decoded geometry; "
+        "each case walks on its own, with a fresh strategy and renderer. Cases 3 and 4 prefetch on a loader thread beside the "
+        "frames (t_p is what the frame leaves of the machine).\n\n";
   md += "| world | objects | triangles | geometry MiB | cells with sets | pvs s | fixed parts MiB |\n|---|---|---|---|---|---|---|\n";
   for (const BenchWorld& w : worlds)
     md += "| " + w.name + " | " + std::to_string(w.objects) + " | " + std::to_string(w.triangles) + " | " +
@@ -221,17 +277,82 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
           fixed(double(w.fixed_bytes) / kMiB, 2) + " |\n";
   md += "\nThe seed (its second world, 370 objects, 1,780 steps; a Pentium II, a DBMS over JDBC): frame time 305.6 / 97.2 / "
         "97.7 / 103.8 ms (sd 133.6 / 52.6 / 51.8 / 46), hit ratio — / 90.9 / 90.8 / 95.2 % for cases 1–4.\n\n";
-  md += "## The cases\n\n" + bench::md_table(kCasesHeader, rows, bench::Align::kFigures);
+  md += "## The cases\n\nStorage: the world file read through the OS page cache, then, on each world's " + p.path_kinds.front() +
+        " path, ";
+  std::string disks;
+  for (const std::string& d : p.disks) disks += (disks.empty() ? "" : "; ") + disk_label(d, p.read_latency_ms);
+  md += (disks.empty() ? "nothing else" : disks) + ".\n\n" + bench::md_table(kCasesHeader, r.cases, bench::Align::kFigures);
   md += "\nA stall frame read geometry it had to draw. The hit ratio is of the store's requests for geometry to draw "
         "(a prefetched object found resident is a hit; one still loading, a miss).\n";
   md += "\n## Target: hybrid + relevance against LRU + one-step, on stall frames and hit ratio\n\n"
-        "| world | cache % | path | stall frames (one-step → hybrid) | hit ratio % | beats on both |\n|---|---|---|---|---|---|\n" + target_rows;
-  md += "\nBeats on both (neither worse, one better): " + std::to_string(beaten) + " of " + std::to_string(compared) +
-        ". Walks whose strategy peak passed its budget: " + std::to_string(over_budget) + ".\n";
-  write_file_atomically((out / "lichiang.md").string(), md);
-  summary["beaten"] = beaten;
-  summary["compared"] = compared;
-  summary["over_budget"] = over_budget;
+        "| world | storage | cache % | path | stall frames (one-step → hybrid) | hit ratio % | beats on both |\n"
+        "|---|---|---|---|---|---|---|\n" + r.target_rows;
+  md += "\nBeats on both (neither worse, one better): " + std::to_string(r.beaten) + " of " + std::to_string(r.compared) +
+        ". Walks whose strategy peak passed its budget: " + std::to_string(r.over_budget) + " (every walk of this report).\n";
+  if (!r.tp.empty()) {
+    md += "\n## Cache size against allowable prefetching time (the seed's future work)\n\n"
+          "Case 4 (hybrid cache, relevance prefetch) in the seed's frame cycle t_c + t_g + t_p: after each frame the frame's own "
+          "thread prefetches for t_p ms (`lichiang:tp_ms=T`; a load once started ends, so t_p used can pass t_p allowed by one "
+          "load), on the " + r.tp.front()[0] + " world's " + r.tp.front()[3] + " path, " + r.tp.front()[1] + ".\n\n"
+          "![stall frames](lichiang/tp-stalls.svg)\n![hit ratio](lichiang/tp-hits.svg)\n![frame time](lichiang/tp-frame.svg)\n\n" +
+          bench::md_table(kTpHeader, r.tp, bench::Align::kFigures);
+  }
+  return md;
+}
+
+}  // namespace
+
+Json run_lichiang_bench(const LiChiangBenchParams& p) {
+  if (p.world_objects.empty() || p.path_kinds.empty()) fail("bench lichiang", "give at least one --objects and one --path");
+  if (p.cache_fractions.empty()) fail("bench lichiang", "give at least one --cache-fraction");
+  for (const std::vector<double>* fractions : {&p.cache_fractions, &p.plot_fractions})
+    for (const double f : *fractions)
+      if (!(f > 0.0 && f <= 1.0)) fail("bench lichiang", "cache fraction " + fixed(f, 3) + " is not in (0, 1]");
+  for (const double tp : p.plot_tp_ms)
+    if (!(tp >= 0.0 && tp <= 1e6)) fail("bench lichiang", "--plot-tp " + fixed(tp, 3) + " is not in [0, 1e6] ms");
+  for (const std::string& d : p.disks) disk_options(d, p.read_latency_ms);
+  for (const std::string& kind : p.path_kinds) parse_session_kind(kind);
+  const auto start = bench::Clock::now();
+  const bench::WorkDir dir(p.work_dir, "lichiang");
+  std::vector<BenchWorld> worlds;
+  for (const uint64_t n : p.world_objects) worlds.push_back(prepare(p, dir, n));
+
+  const std::unique_ptr<GlContext> context = GlContext::headless();
+  Results r;
+  for (const BenchWorld& w : worlds) {
+    const World world(w.file);
+    for (const double fraction : p.cache_fractions)
+      for (const std::string& kind : p.path_kinds) walk_cases(p, w, world, disk_label("cached", 0), fraction, kind, r);
+    for (const std::string& disk : p.disks) {
+      const World on_disk(w.file, disk_options(disk, p.read_latency_ms));
+      for (const double fraction : p.cache_fractions)
+        walk_cases(p, w, on_disk, disk_label(disk, p.read_latency_ms), fraction, p.path_kinds.front(), r);
+    }
+  }
+  if (!p.plot_fractions.empty() && !p.plot_tp_ms.empty()) {
+    const BenchWorld& largest = *std::max_element(worlds.begin(), worlds.end(), [](const BenchWorld& a, const BenchWorld& b) {
+      return a.objects < b.objects;
+    });
+    const std::string disk = p.disks.empty() ? "cached" : p.disks.back();
+    const World world(largest.file, disk_options(disk, p.read_latency_ms));
+    walk_tp_grid(p, largest, world, disk_label(disk, p.read_latency_ms), r);
+  }
+
+  const fs::path out = fs::path(p.out_dir), sub = out / "lichiang";
+  fs::create_directories(sub);
+  bench::write_csv(sub / "cases.csv", kCasesHeader, r.cases);
+  if (!r.tp.empty()) {
+    bench::write_csv(sub / "tp.csv", kTpHeader, r.tp);
+    write_plot(sub / "tp-stalls.svg", "Stall frames against prefetch time, by cache size", "stall frames, %", r.tp_stalls, 100.0);
+    write_plot(sub / "tp-hits.svg", "Hit ratio against prefetch time, by cache size", "hit ratio, %", r.tp_hits, 100.0);
+    write_plot(sub / "tp-frame.svg", "Frame time against prefetch time, by cache size", "frame time, ms (mean)", r.tp_frame, 0.0);
+  }
+  write_file_atomically((out / "lichiang.md").string(), report(p, worlds, r, bench::seconds_since(start) / 60.0));
+  Json summary = r.summary;
+  summary["beaten"] = r.beaten;
+  summary["compared"] = r.compared;
+  summary["over_budget"] = r.over_budget;
+  summary["tp_walks"] = r.tp.size();
   return summary;
 }
 

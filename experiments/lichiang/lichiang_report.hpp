@@ -7,7 +7,12 @@
 // requests, stall frames (a frame that read geometry it had to draw), bytes read, and the
 // process's strategy peak against its budget. Each case walks on its own, with a fresh strategy
 // and renderer (interleaving would hand one case's prefetch thread the others' frames).
-// Writes <out>/lichiang.md and <out>/lichiang/cases.csv.
+// Then the same four cases on each world's first path at each cache share over slower storage
+// (the page cache bypassed; bypassed with a per-read latency), and the seed's future work: the
+// effect of cache size against allowable prefetching time (case 4 with t_p on the frame's
+// thread, tp_ms, over a grid of cache shares and t_p) on the largest world's first path, on the
+// slow disk.
+// Writes <out>/lichiang.md, <out>/lichiang/cases.csv, storage.csv, tp.csv and tp-*.svg.
 #pragma once
 
 #include <cstdint>
@@ -31,6 +36,14 @@ struct LiChiangBenchParams {
   uint64_t path_seed = 5;
   // The store's cache shares, as fractions of the world's geometry: every case runs at each.
   std::vector<double> cache_fractions = {0.05, 0.5};
+  // Storage the cases also run on (each world's first path): "direct" (the OS page cache
+  // bypassed), "slow" (bypassed, and read_latency_ms before every read).
+  std::vector<std::string> disks = {"direct", "slow"};
+  double read_latency_ms = 2.0;
+  // The cache size against prefetch time plot (the seed's future work): case 4 with tp_ms = each
+  // of plot_tp_ms at each of plot_fractions. Empty: no plot.
+  std::vector<double> plot_fractions = {0.02, 0.05, 0.1, 0.25, 0.5};
+  std::vector<double> plot_tp_ms = {0, 2, 5, 10, 20, 40};
   double gpu_mib = 1.0;            // the renderer's buffer cache
   int width = 256, height = 192;
   int threads = 0;                 // precompute threads, 0 = all cores

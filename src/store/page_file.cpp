@@ -4,6 +4,9 @@
 // ("bypass the page cache with O_DIRECT or posix_fadvise(DONTNEED)").
 #include "cellwalk/store/page_file.hpp"
 
+#include <chrono>
+#include <thread>
+
 #include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -164,6 +167,12 @@ PageFile::PageFile(const std::string& path, Options options)
   auto file = std::make_unique<FileReadSource>(path, options.bypass_cache, page_size_);
   mode_ = file->mode();
   source_ = std::move(file);
+  if (options.read_latency_us > 0) source_ = std::make_unique<DelayedReadSource>(std::move(source_), options.read_latency_us);
+}
+
+long DelayedReadSource::read_at(void* dst, size_t bytes, uint64_t offset) {
+  std::this_thread::sleep_for(std::chrono::microseconds(latency_us_));
+  return inner_->read_at(dst, bytes, offset);
 }
 
 PageFile::PageFile(std::unique_ptr<ReadSource> source, size_t page_size)

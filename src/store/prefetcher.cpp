@@ -4,6 +4,7 @@
 #include "cellwalk/store/prefetcher.hpp"
 
 #include <algorithm>
+#include <chrono>
 
 #include "cellwalk/core/error.hpp"
 
@@ -129,10 +130,19 @@ void Prefetcher::worker() {
   }
 }
 
-size_t Prefetcher::step(size_t max_requests) {
+size_t Prefetcher::step(size_t max_requests) { return step_while(max_requests, [] { return true; }); }
+
+size_t Prefetcher::step_for(double ms) {
+  const auto start = std::chrono::steady_clock::now();
+  return step_while(SIZE_MAX, [&] {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count() < ms;
+  });
+}
+
+size_t Prefetcher::step_while(size_t max_requests, const std::function<bool()>& more) {
   if (options_.threads != 0) fail("Prefetcher::step", "only for deterministic mode (threads = 0)");
   size_t ran = 0;
-  for (; ran < max_requests; ++ran) {
+  for (; ran < max_requests && more(); ++ran) {
     std::optional<PrefetchRequest> request;
     {
       std::lock_guard lock(mutex_);

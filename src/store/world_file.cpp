@@ -41,7 +41,7 @@ WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
     auto h = world_layout::decode_header(first, path, probe.size_bytes());
     page_size_ = h.page_size;
   }
-  pages_ = std::make_unique<PageFile>(path, PageFile::Options{page_size_, options.bypass_cache});
+  pages_ = std::make_unique<PageFile>(path, PageFile::Options{page_size_, options.bypass_cache, options.read_latency_us});
   auto header_page = read_pages(*pages_, 0, 1);
   const auto h = world_layout::decode_header(header_page, path, pages_->size_bytes());
   page_count_ = h.page_count;

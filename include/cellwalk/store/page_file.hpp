@@ -102,6 +102,26 @@ class FaultInjectingSource final : public ReadSource {
   std::vector<Rule> rules_;
 };
 
+// A slow disk, for experiments (issue 18: Li & Chiang's cases on a slow disk): forwards to
+// `inner` after sleeping `latency_us` microseconds per read_at call, as a seek would cost.
+// Thread-safety: as `inner`; concurrent reads wait side by side, as on a disk with a queue.
+class DelayedReadSource final : public ReadSource {
+ public:
+  DelayedReadSource(std::unique_ptr<ReadSource> inner, uint32_t latency_us)
+      : inner_(std::move(inner)), latency_us_(latency_us) {}
+
+  long read_at(void* dst, size_t bytes, uint64_t offset) override;
+  uint64_t size() const override { return inner_->size(); }
+  size_t alignment() const override { return inner_->alignment(); }
+  void after_read(uint64_t offset, size_t bytes) override { inner_->after_read(offset, bytes); }
+  const std::string& name() const override { return inner_->name(); }
+  uint32_t latency_us() const { return latency_us_; }
+
+ private:
+  std::unique_ptr<ReadSource> inner_;
+  uint32_t latency_us_;
+};
+
 struct PageFileCounters {
   uint64_t requests = 0;  // read() calls that succeeded
   uint64_t pages = 0;     // pages delivered
@@ -114,6 +134,7 @@ class PageFile {
   struct Options {
     size_t page_size = 4096;    // REQUIRES: a power of two >= 512
     bool bypass_cache = false;  // O_DIRECT, else drop-behind; see FileReadSource
+    uint32_t read_latency_us = 0;  // > 0: every read waits this long first (DelayedReadSource)
   };
 
   // Opens `path` read-only. Throws Error naming the path on failure.

@@ -18,6 +18,7 @@
 
 #include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -74,6 +75,11 @@ class Prefetcher {
   // Deterministic mode: runs up to `max_requests` queued requests on this thread, highest
   // priority first; returns how many ran. REQUIRES: threads == 0.
   size_t step(size_t max_requests);
+  // Deterministic mode: runs queued requests, highest priority first, while less than `ms`
+  // milliseconds have passed since the call began (Li & Chiang's t_p, the time a frame allows
+  // for prefetching); a request once started runs to its end. Returns how many ran.
+  // REQUIRES: threads == 0.
+  size_t step_for(double ms);
   size_t run_until_idle();
   // Blocks until the queue is empty and nothing runs (background mode).
   void wait_idle();
@@ -88,6 +94,8 @@ class Prefetcher {
     uint64_t sequence = 0;
   };
 
+  // Runs queued requests while fewer than `max_requests` ran and `more()` says so (asked before each).
+  size_t step_while(size_t max_requests, const std::function<bool()>& more);
   std::optional<PrefetchRequest> pop_locked();
   void erase_locked(CacheKey key);
   void execute(const PrefetchRequest& request);

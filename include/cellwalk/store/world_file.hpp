@@ -62,6 +62,7 @@ class WorldFile {
  public:
   struct Options {
     bool bypass_cache = false;  // read around the OS page cache (O_DIRECT or drop-behind)
+    uint32_t read_latency_us = 0;  // a slow disk: each read waits this long first (experiments)
   };
   WorldFile(const std::string& path, Options options);
   ~WorldFile();

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <optional>
 #include <unordered_map>
@@ -34,6 +35,13 @@ int whole(const StrategySetting& s, int lo, int hi) {
   return int(v);
 }
 
+// A setting's number as the name gives it back (shortest form: 5, 2.5, 1e-05).
+std::string number_text(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", v);
+  return text;
+}
+
 }  // namespace
 
 LiChiangConfig parse_lichiang_strategy_name(const std::string& name) {
@@ -52,8 +60,14 @@ LiChiangConfig parse_lichiang_strategy_name(const std::string& name) {
     } else if (s.key == "sectors") c.sectors = whole(s, 1, 64);
     else if (s.key == "neighbours") c.neighbours = whole(s, 0, 1) != 0;
     else if (s.key == "cull") c.cull = whole(s, 0, 1) != 0;
-    else s.unknown("cache, prefetch, sectors, neighbours, cull");
+    else if (s.key == "tp_ms") c.tp_ms = s.number(0, 1e6);
+    else if (s.key == "frame_ms") c.frame_ms = s.number(0, 1e6);
+    else s.unknown("cache, prefetch, sectors, neighbours, cull, tp_ms, frame_ms");
   });
+  if (c.tp_ms >= 0 && c.frame_ms >= 0)
+    fail("strategy \"" + name + "\"", "give tp_ms (a fixed prefetch time) or frame_ms (t_p = frame_ms - t_c - t_g), not both");
+  if (c.prefetch_in_frame() && c.prefetch == LiChiangConfig::Prefetch::kNone)
+    fail("strategy \"" + name + "\"", "tp_ms and frame_ms set the time for prefetching; with prefetch=none there is none");
   if (c.cache == LiChiangConfig::Cache::kNone && c.prefetch != LiChiangConfig::Prefetch::kNone)
     fail("strategy \"" + name + "\"", "cache=none keeps nothing, so it has nowhere to prefetch into; add prefetch=none (the seed's case 1)");
   return c;
@@ -102,8 +116,9 @@ struct LiChiangStrategy::Impl {
         store(w, o.memory_budget_bytes,
               c.cache == LiChiangConfig::Cache::kHybrid ? make_hybrid_relevance_policy() : make_lru_policy(),
               c.prefetch != Prefetch::kNone ? 2 : 1),
-        // One loader thread, one load at a time: the store keeps room for it beside get()'s.
-        prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone ? 1u : 0u, 1}) {
+        // One loader thread, one load at a time: the store keeps room for it beside get()'s. In
+        // the seed's cycle (tp_ms, frame_ms) the frame's thread steps it instead.
+        prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone && !c.prefetch_in_frame() ? 1u : 0u, 1}) {
     pvs_bytes = pvs.resident_bytes();
     if (!store.buffer().budget().try_reserve(pvs_bytes))
       fail(w.file().path(), "memory budget of " + byte_size_text(o.memory_budget_bytes) +
@@ -113,7 +128,7 @@ struct LiChiangStrategy::Impl {
   // The loader thread stops before the bytes it could admit into are released.
   ~Impl() {
     prefetcher.cancel_older_than(UINT64_MAX);
-    if (config.prefetch != Prefetch::kNone) prefetcher.wait_idle();
+    if (config.prefetch != Prefetch::kNone && !config.prefetch_in_frame()) prefetcher.wait_idle();
     sets.clear();
     store.buffer().budget().release(pvs_bytes + sets_bytes);
   }
@@ -137,7 +152,19 @@ struct LiChiangStrategy::Impl {
   std::vector<CacheKey> used;  // cache=none: what the last frame read, dropped before the next
   LiChiangCounters counters;
   std::shared_ptr<const Mesh> current;  // the mesh handed to the renderer for upload
+  std::optional<Stopwatch> work;        // since the last frame's t_p ended: its t_c + t_g
   Prefetcher prefetcher;                // last: destroyed first, while what its jobs use exists
+
+  // t_p in the seed's cycle, run when the next frame begins: the fixed allowance, or what the
+  // frame budget leaves of the last frame's t_c + t_g (nothing before the first frame).
+  void prefetch_in_frame() {
+    double tp = config.tp_ms;
+    if (config.frame_ms >= 0.0) tp = work ? std::max(0.0, config.frame_ms - work->ms()) : 0.0;
+    Stopwatch spent;
+    prefetcher.step_for(tp);
+    counters.prefetch_ms += spent.ms();
+    work.emplace();
+  }
 
   const ViewCellPartition& cells() const { return pvs.partition(); }
   // Objects drawn are the most relevant of their frame (w = c).
@@ -288,13 +315,16 @@ std::string LiChiangStrategy::name() const {
   if (c.sectors != d.sectors) add("sectors=" + std::to_string(c.sectors));
   if (c.neighbours != d.neighbours) add("neighbours=0");
   if (c.cull != d.cull) add("cull=0");
+  if (c.tp_ms >= 0) add("tp_ms=" + number_text(c.tp_ms));
+  if (c.frame_ms >= 0) add("frame_ms=" + number_text(c.frame_ms));
   return s.empty() ? "lichiang" : "lichiang:" + s;
 }
 
 // Outside every cell (or in a solid one) no set holds: the frame draws the frustum, as brute.
 void LiChiangStrategy::select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) {
-  Stopwatch watch;
   Impl& s = *impl_;
+  if (s.config.prefetch_in_frame()) s.prefetch_in_frame();
+  Stopwatch watch;
   const uint64_t frame = s.frame = s.counters.frames++;
   if (s.config.cache == LiChiangConfig::Cache::kNone) {
     s.current.reset();  // held, it could not be erased

@@ -26,6 +26,10 @@ namespace cellwalk {
 //   sectors=8          orientation sectors of a configuration (1: position only)
 //   neighbours=1       draw the union of the 1-neighbours' sets, as the seed (0: the own set)
 //   cull=1             frustum-cull what is drawn (0: draw the whole union)
+//   tp_ms=T            the seed's frame cycle t_c + t_g + t_p: after each frame, prefetch on the
+//                      frame's own thread for T ms (a load once started ends); without tp_ms or
+//                      frame_ms the loader thread runs beside the frames
+//   frame_ms=F         as tp_ms, with t_p = F − (t_c + t_g) of the frame just drawn, at least 0
 // The seed's four cases: cache=none,prefetch=none; cache=lru,prefetch=none;
 // cache=lru,prefetch=one-step; cache=hybrid,prefetch=relevance (the default).
 struct LiChiangConfig {
@@ -36,6 +40,11 @@ struct LiChiangConfig {
   int sectors = 8;
   bool neighbours = true;
   bool cull = true;
+  // t_p on the frame's thread (the seed's cycle): a fixed allowance, or what is left of a frame
+  // budget. Both < 0: the loader thread runs beside the frames instead.
+  double tp_ms = -1.0;
+  double frame_ms = -1.0;
+  bool prefetch_in_frame() const { return tp_ms >= 0.0 || frame_ms >= 0.0; }
 };
 bool is_lichiang_strategy_name(const std::string& name);
 LiChiangConfig parse_lichiang_strategy_name(const std::string& name);
@@ -47,6 +56,7 @@ struct LiChiangCounters {
   uint64_t prefetch_requests = 0;      // objects handed to the loader thread
   uint64_t drawn_ids = 0;              // Σ over frames of the union drawn (before culling)
   uint64_t own_ids = 0;                // Σ over frames of the configuration's own set
+  double prefetch_ms = 0.0;            // Σ t_p spent prefetching on the frame's thread (tp_ms, frame_ms)
 };
 
 class LiChiangStrategy : public Strategy {
