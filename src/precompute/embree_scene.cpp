@@ -11,6 +11,7 @@
 
 #include "cellwalk/core/error.hpp"
 #include "precompute/occluders.hpp"
+#include "precompute/triangle_distance.hpp"
 
 namespace cellwalk::visibility {
 
@@ -53,7 +54,8 @@ RTCGeometry make_geometry(RTCDevice device, const Mesh& mesh, std::span<const Ve
 
 }  // namespace
 
-EmbreeScene::EmbreeScene(const World& world) : world_(world), solids_(world.object_count()) {
+EmbreeScene::EmbreeScene(const World& world)
+    : world_(world), solids_(world.object_count()), positions_(world.object_count()), indices_(world.object_count()) {
   device_ = rtcNewDevice(nullptr);
   if (!device_) fail("embree", "cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
   scene_ = rtcNewScene(device_);
@@ -67,6 +69,8 @@ EmbreeScene::EmbreeScene(const World& world) : world_(world), solids_(world.obje
     solid.closed = visibility::is_closed(mesh);
     solid.oriented = solid.closed && visibility::is_oriented(mesh);
     RTCGeometry g = make_geometry(device_, mesh, solid.positions, solid.indices);
+    positions_[i] = solid.positions;
+    indices_[i] = solid.indices;
     std::lock_guard lock(attach);
     rtcAttachGeometryByID(scene_, g, id);
     rtcReleaseGeometry(g);
@@ -107,6 +111,105 @@ void EmbreeScene::first_hits(const Vec3& origin, std::span<const Vec3> dirs, flo
     for (size_t i = 0; i < n; ++i)
       ids[from + i] = rays[i].hit.geomID == RTC_INVALID_GEOMETRY_ID ? 0 : rays[i].hit.geomID + 1;
   }
+}
+
+std::optional<EmbreeScene::Hit> EmbreeScene::hit(const Vec3& origin, const Vec3& dir, float near, float far) const {
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  RTCRayHit rh = make_ray(origin, dir, near, far);
+  rtcIntersect1(scene_, &context, &rh);
+  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+  const Vec3 n(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+  const float length = glm::length(n);
+  return Hit{rh.ray.tfar, rh.hit.geomID, length > 0 ? n / length : Vec3(0.0f)};
+}
+
+namespace {
+
+// What a point query over the scene's triangles carries to its callback.
+struct SegmentQuery {
+  const std::vector<std::span<const Vec3>>* positions;
+  const std::vector<std::span<const uint32_t>>* indices;
+  glm::dvec3 a, b;
+  double clearance = 0;  // clear(): a triangle nearer than this ends the query
+  double above_y = 0;    // distance_above(): triangles wholly at or below it are skipped
+  bool blocked = false;
+  double nearest = 0;
+};
+
+std::array<glm::dvec3, 3> triangle(const SegmentQuery& q, unsigned geom, unsigned prim) {
+  const auto& pos = (*q.positions)[geom];
+  const auto& idx = (*q.indices)[geom];
+  return {glm::dvec3(pos[idx[3 * prim]]), glm::dvec3(pos[idx[3 * prim + 1]]), glm::dvec3(pos[idx[3 * prim + 2]])};
+}
+
+bool clear_callback(RTCPointQueryFunctionArguments* args) {
+  auto& q = *static_cast<SegmentQuery*>(args->userPtr);
+  const auto [a, b, c] = triangle(q, args->geomID, args->primID);
+  if (segment_triangle_distance(q.a, q.b, a, b, c) >= q.clearance) return false;
+  q.blocked = true;
+  args->query->radius = 0.0f;  // one is enough: end the query
+  return true;
+}
+
+bool nearest_callback(RTCPointQueryFunctionArguments* args) {
+  auto& q = *static_cast<SegmentQuery*>(args->userPtr);
+  const auto [a, b, c] = triangle(q, args->geomID, args->primID);
+  if (std::max({a.y, b.y, c.y}) <= q.above_y) return false;
+  const double d = point_triangle_distance(q.a, a, b, c);
+  if (d >= q.nearest) return false;
+  q.nearest = d;
+  args->query->radius = static_cast<float>(d);
+  return true;
+}
+
+}  // namespace
+
+bool EmbreeScene::clear(const Vec3& a, const Vec3& b, float clearance) const {
+  SegmentQuery q{&positions_, &indices_, glm::dvec3(a), glm::dvec3(b)};
+  q.clearance = clearance;
+  RTCPointQuery query{};
+  const Vec3 mid = (a + b) * 0.5f;
+  query.x = mid.x;
+  query.y = mid.y;
+  query.z = mid.z;
+  // Every point of a triangle nearer than `clearance` to the segment lies within this sphere;
+  // the margin covers float rounding of the centre and radius.
+  query.radius = glm::length(b - a) * 0.5f + clearance * 1.001f + 1e-5f * (1.0f + glm::length(mid));
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  rtcPointQuery(scene_, &query, &context, clear_callback, &q);
+  return !q.blocked;
+}
+
+float EmbreeScene::distance_above(const Vec3& p, float limit, float above_y) const {
+  SegmentQuery q{&positions_, &indices_, glm::dvec3(p), glm::dvec3(p)};
+  q.above_y = above_y;
+  q.nearest = limit;
+  RTCPointQuery query{};
+  query.x = p.x;
+  query.y = p.y;
+  query.z = p.z;
+  query.radius = limit;
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  rtcPointQuery(scene_, &query, &context, nearest_callback, &q);
+  return static_cast<float>(q.nearest);
+}
+
+bool EmbreeScene::inside_any(const Vec3& p) const {
+  std::array<ObjectId, 6> tested{};
+  size_t count = 0;
+  for (int axis = 0; axis < 3; ++axis)
+    for (float sign : {1.0f, -1.0f}) {
+      Vec3 dir(0.0f);
+      dir[axis] = sign;
+      const auto h = first_hit(p, dir, std::numeric_limits<float>::infinity());
+      if (!h || std::find(tested.begin(), tested.begin() + count, *h) != tested.begin() + count) continue;
+      tested[count++] = *h;
+      if (inside(*h, p)) return true;
+    }
+  return false;
 }
 
 bool EmbreeScene::inside(ObjectId id, const Vec3& p) const {

@@ -1,6 +1,7 @@
 // The world's full-detail triangles (level 0 of every object) in one Embree scene, for the
-// sampling engine's rays (vLOD §5 samples visibility; HDoV thesis §5.5 renders it) and the
-// point-in-solid test that marks view cells inside objects.
+// sampling engine's rays (vLOD §5 samples visibility; HDoV thesis §5.5 renders it), the
+// point-in-solid test that marks view cells inside objects, and the clearance queries of the
+// path planner (path_planner.cpp).
 #pragma once
 
 #include <embree3/rtcore.h>
@@ -32,6 +33,30 @@ class EmbreeScene {
   // GL projection does. REQUIRES ids.size() == dirs.size().
   void first_hits(const Vec3& origin, std::span<const Vec3> dirs, float near, float far, std::span<uint32_t> ids) const;
 
+  // A ray's first hit: its distance along the (unit) direction, the object, and the hit
+  // triangle's unit normal (as wound: a double-sided surface may give either side's).
+  struct Hit {
+    float t = 0;
+    ObjectId id = 0;
+    Vec3 normal{0.0f};
+  };
+  // The first hit along origin + t·dir for t in [near, far]. REQUIRES |dir| = 1.
+  std::optional<Hit> hit(const Vec3& origin, const Vec3& dir, float near, float far) const;
+
+  // Whether every point of the segment [a, b] (a point when a == b) lies at least `clearance`
+  // from every triangle, measured exactly in double precision (point query over the triangles
+  // near the segment, then segment–triangle distances).
+  bool clear(const Vec3& a, const Vec3& b, float clearance) const;
+
+  // The distance from p to the nearest triangle with a vertex above height `above_y`, or
+  // `limit` when none is nearer.
+  float distance_above(const Vec3& p, float limit, float above_y) const;
+
+  // Whether p is provably inside some closed object: inside() for each object hit first by a
+  // ray from p along ±x, ±y, ±z. An object that holds another one between p and its own
+  // surface in all six directions is missed.
+  bool inside_any(const Vec3& p) const;
+
   // Whether p is provably inside the solid object `id`'s mesh bounds: the mesh is closed
   // (is_closed) and visibility::solid_at says so, by winding number when the mesh is oriented,
   // else by parity, along six rays that must agree. Never for an open mesh (a plane, a slanted
@@ -54,6 +79,9 @@ class EmbreeScene {
 
   const World& world_;
   std::vector<Solid> solids_;  // per object
+  // The same spans again, by geometry id, as the point-query callbacks read them.
+  std::vector<std::span<const Vec3>> positions_;
+  std::vector<std::span<const uint32_t>> indices_;
   RTCDevice device_ = nullptr;
   RTCScene scene_ = nullptr;
 };
