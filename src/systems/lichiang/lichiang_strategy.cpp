@@ -101,7 +101,7 @@ struct LiChiangStrategy::Impl {
         pvs(open_sets(w)),
         store(w, o.memory_budget_bytes,
               c.cache == LiChiangConfig::Cache::kHybrid ? make_hybrid_relevance_policy() : make_lru_policy(),
-              c.prefetch != Prefetch::kNone ? 2 : 1),
+              c.prefetch != Prefetch::kNone ? 2 : 1, open_level_source(w, o.objects_db)),
         // One loader thread, one load at a time: the store keeps room for it beside get()'s.
         prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone ? 1u : 0u, 1}) {
     pvs_bytes = pvs.resident_bytes();
