@@ -33,6 +33,9 @@ void register_bench_lichiang(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--width", p.width, "Image width")->capture_default_str()->check(integer_in(16, 4096));
   cmd->add_option("--height", p.height, "Image height")->capture_default_str()->check(integer_in(16, 4096));
   cmd->add_option("--threads", p.threads, "Precompute threads (0: all cores)")->capture_default_str()->check(integer_in(0, 1024));
+  cmd->add_option("--backend", p.backends, "Where objects are read: file (the world file), sqlite (the object database, first world only)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"file", "sqlite"}));
   cmd->add_option("--out", p.out_dir, "Directory of the report (lichiang.md and lichiang/)")->capture_default_str();
   cmd->add_option("--work-dir", p.work_dir, "Where the worlds go (default: a temporary directory)");
   cmd->add_flag("--json", args->json, "Print the summary as JSON");

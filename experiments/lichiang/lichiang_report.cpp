@@ -17,6 +17,7 @@
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/scene/path_generator.hpp"
 #include "cellwalk/store/geometry_store.hpp"
+#include "cellwalk/store/object_database.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/lichiang/lichiang_strategy.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
@@ -112,11 +113,12 @@ struct CaseRun {
   std::string strategy;
   double mean_ms = 0, sd_ms = 0;
   uint64_t hits = 0, misses = 0, stalls = 0, bytes_read = 0, peak = 0, prefetches = 0;
+  double io_ms = 0;  // the frames' own reads (a prefetch's are the loader thread's)
   double hit_ratio() const { return hits + misses ? double(hits) / double(hits + misses) : 0.0; }
 };
 
 CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& world, const CameraPath& path,
-                  const std::string& strategy_name, const std::string& label) {
+                  const std::string& strategy_name, const std::string& objects_db, const std::string& label) {
   RenderSettings settings;
   settings.width = p.width;
   settings.height = p.height;
@@ -125,6 +127,7 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
   StrategyOptions options;
   options.memory_budget_bytes = budget;
   options.viewport_height_px = float(p.height);
+  options.objects_db = objects_db;
   const std::unique_ptr<Strategy> strategy = make_strategy(strategy_name, world, options);
   Camera lens;
   lens.aspect = float(p.width) / float(p.height);
@@ -140,6 +143,7 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
     r.misses += f.cache_misses;
     r.stalls += f.stall ? 1 : 0;
     r.bytes_read += f.bytes_read;
+    r.io_ms += f.io_ms;
   }
   r.mean_ms = bench::mean(ms);
   r.sd_ms = std::sqrt(bench::variance(ms));
@@ -148,8 +152,18 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
   return r;
 }
 
-const std::vector<std::string> kCasesHeader = {"world", "cache % of world", "path", "case", "frame ms mean", "sd", "hit ratio %", "stall frames",
-                                               "stall %", "MiB read", "prefetch requests", "peak / budget MiB"};
+// The (world, backend) pairs walked, in order: every world from the file, the first also from
+// the other backends.
+std::vector<std::pair<size_t, std::string>> backend_runs(size_t worlds, const std::vector<std::string>& backends) {
+  std::vector<std::pair<size_t, std::string>> runs;
+  for (size_t i = 0; i < worlds; ++i)
+    for (const std::string& b : backends)
+      if (b == "file" || i == 0) runs.emplace_back(i, b);
+  return runs;
+}
+
+const std::vector<std::string> kCasesHeader = {"world", "backend", "cache % of world", "path", "case", "frame ms mean", "sd", "hit ratio %", "stall frames",
+                                               "stall %", "MiB read", "I/O ms a miss", "prefetch requests", "peak / budget MiB"};
 
 }  // namespace
 
@@ -159,6 +173,8 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
   for (const double f : p.cache_fractions)
     if (!(f > 0.0 && f <= 1.0)) fail("bench lichiang", "--cache-fraction " + fixed(f, 3) + " is not in (0, 1]");
   for (const std::string& kind : p.path_kinds) parse_session_kind(kind);
+  for (const std::string& b : p.backends)
+    if (b != "file" && b != "sqlite") fail("bench lichiang", "--backend " + b + ": expected file or sqlite");
   const auto start = bench::Clock::now();
   const bench::WorkDir dir(p.work_dir, "lichiang");
   std::vector<BenchWorld> worlds;
@@ -169,21 +185,26 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
   Json summary = Json::object();
   int compared = 0, beaten = 0, over_budget = 0;
   std::string target_rows;
-  for (const BenchWorld& w : worlds) {
+  for (const auto& [world_index, backend] : backend_runs(worlds.size(), p.backends)) {
+    const BenchWorld& w = worlds[world_index];
     const World world(w.file);
+    const std::string db = backend == "sqlite" ? w.file + ".sqlite" : "";
+    if (!db.empty()) build_object_database(world, db);
+    const std::string name = backend == "file" ? w.name : w.name + " (" + backend + ")";
     for (const double fraction : p.cache_fractions) {
-      const uint64_t budget = w.fixed_bytes + uint64_t(fraction * double(w.geometry_bytes));
+      const uint64_t budget = w.fixed_bytes + level_source_bound(world, db) + uint64_t(fraction * double(w.geometry_bytes));
       const std::string share = fixed(100 * fraction, 1);
       for (const std::string& kind : p.path_kinds) {
         std::vector<CaseRun> runs;
         for (const std::string& c : lichiang_cases())
-          runs.push_back(walk_case(p, budget, world, w.paths.at(kind), c, w.name + ", " + share + " %, " + kind + ", " + c));
+          runs.push_back(walk_case(p, budget, world, w.paths.at(kind), c, db, name + ", " + share + " %, " + kind + ", " + c));
         for (const CaseRun& r : runs) {
-          rows.push_back({w.name, share, kind, r.strategy, fixed(r.mean_ms, 1), fixed(r.sd_ms, 1), fixed(100 * r.hit_ratio(), 2),
+          rows.push_back({w.name, backend, share, kind, r.strategy, fixed(r.mean_ms, 1), fixed(r.sd_ms, 1), fixed(100 * r.hit_ratio(), 2),
                           std::to_string(r.stalls), fixed(100.0 * double(r.stalls) / double(p.frames), 2),
-                          fixed(double(r.bytes_read) / kMiB, 1), std::to_string(r.prefetches),
+                          fixed(double(r.bytes_read) / kMiB, 1), fixed(r.misses ? r.io_ms / double(r.misses) : 0.0, 3),
+                          std::to_string(r.prefetches),
                           fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
-          summary[w.name][share][kind][r.strategy] = {{"frame_ms", r.mean_ms}, {"sd_ms", r.sd_ms}, {"hit_ratio", r.hit_ratio()},
+          summary[name][share][kind][r.strategy] = {{"frame_ms", r.mean_ms}, {"sd_ms", r.sd_ms}, {"hit_ratio", r.hit_ratio()},
                                                       {"stall_frames", r.stalls}, {"bytes_read", r.bytes_read},
                                                       {"peak_bytes", r.peak}, {"budget_bytes", budget}};
           over_budget += r.peak > budget;
@@ -193,7 +214,7 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
                            (hybrid.stalls < one_step.stalls || hybrid.hit_ratio() > one_step.hit_ratio());
         ++compared;
         beaten += beats;
-        target_rows += "| " + w.name + " | " + share + " | " + kind + " | " + std::to_string(one_step.stalls) + " → " +
+        target_rows += "| " + name + " | " + share + " | " + kind + " | " + std::to_string(one_step.stalls) + " → " +
                        std::to_string(hybrid.stalls) + " | " + fixed(100 * one_step.hit_ratio(), 2) + " → " +
                        fixed(100 * hybrid.hit_ratio(), 2) + " | " + (beats ? "yes" : "**no**") + " |\n";
       }
@@ -213,7 +234,7 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
         " (the seed's were 1,068 and 1,780 steps from a path planner). Images " + std::to_string(p.width) + "×" +
         std::to_string(p.height) + " on llvmpipe; the renderer's buffer cache is held to " + fixed(p.gpu_mib, 1) +
         " MiB so the store is what caches. The budget of every case is the strategy's fixed parts (directory, room for two "
-        "loads, the stored sets, the sets of the cells in use) plus a cache share, a fraction of the world's decoded geometry; each case walks on its own, with a fresh strategy and renderer.\n\n";
+        "loads, the stored sets, the sets of the cells in use; over the sqlite backend, the object database's bound too) plus a cache share, a fraction of the world's decoded geometry; each case walks on its own, with a fresh strategy and renderer.\n\n";
   md += "| world | objects | triangles | geometry MiB | cells with sets | pvs s | fixed parts MiB |\n|---|---|---|---|---|---|---|\n";
   for (const BenchWorld& w : worlds)
     md += "| " + w.name + " | " + std::to_string(w.objects) + " | " + std::to_string(w.triangles) + " | " +
@@ -222,6 +243,9 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
   md += "\nThe seed (its second world, 370 objects, 1,780 steps; a Pentium II, a DBMS over JDBC): frame time 305.6 / 97.2 / "
         "97.7 / 103.8 ms (sd 133.6 / 52.6 / 51.8 / 46), hit ratio — / 90.9 / 90.8 / 95.2 % for cases 1–4.\n\n";
   md += "## The cases\n\n" + bench::md_table(kCasesHeader, rows, bench::Align::kFigures);
+  md += "\nBackend: where the store reads objects, `file` (the world file's pages) or `sqlite` (the object database of "
+        "`cellwalk db`, one prepared query per object, as the seed's DBMS over JDBC; the first world only). I/O ms a miss: the "
+        "frames' own read time over their misses (a prefetch reads on the loader thread).\n";
   md += "\nA stall frame read geometry it had to draw. The hit ratio is of the store's requests for geometry to draw "
         "(a prefetched object found resident is a hit; one still loading, a miss).\n";
   md += "\n## Target: hybrid + relevance against LRU + one-step, on stall frames and hit ratio\n\n"

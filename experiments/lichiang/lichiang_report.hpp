@@ -34,6 +34,10 @@ struct LiChiangBenchParams {
   double gpu_mib = 1.0;            // the renderer's buffer cache
   int width = 256, height = 192;
   int threads = 0;                 // precompute threads, 0 = all cores
+  // Where the store reads objects: "file" (the world file's pages) and "sqlite" (the object
+  // database, `cellwalk db`, one query per object as the seed's DBMS). sqlite runs on the first
+  // world only, the cases' budgets grown by the database's bound so the cache share is the same.
+  std::vector<std::string> backends = {"file", "sqlite"};
   std::string out_dir = "docs/results";
   std::string work_dir;            // empty = a temporary directory, removed at the end
   std::string command_line;
