@@ -76,6 +76,7 @@ TEST_F(HostileCli, OutputThatIsTheInputIsRefusedAndTheInputSurvives) {
                                   "path " + world + " --frames 5 -o " + dir.file("link.cww"),
                                   "render " + world + " -o " + world,
                                   "visual-build " + world + " -o " + world,
+                                  "db " + world + " -o " + world,
                                   "build " + scene + " -o " + scene,
                                   "import " + off + " -o " + off,
                                   "import " + off + " -o " + dir.file("x.cwscene") + " --obj " + off,

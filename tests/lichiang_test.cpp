@@ -366,7 +366,8 @@ TEST_F(LiChiangSystem, PrefetchTimeInTheFrameIsWhatPrefetchingGets) {
 
 // The bench on a tiny city: its report and CSV are written; with the cache as large as the
 // world, the caching cases read each object once and no case passes its budget; without a
-// cache every frame reads again.
+// cache every frame reads again. Over the object database, the case without prefetching reads
+// what it reads from the world file.
 TEST(LiChiangBench, WritesItsReportAndTheCasesBehave) {
   const test::TempDir dir;
   LiChiangBenchParams p;
@@ -379,7 +380,7 @@ TEST(LiChiangBench, WritesItsReportAndTheCasesBehave) {
   p.height = 48;
   p.out_dir = dir.file("results");
   p.work_dir = dir.file("work");
-  p.disks = {"slow"};
+  p.storages = {"slow", "sqlite"};
   p.read_latency_ms = 0.2;
   p.plot_fractions = {1.0};
   p.plot_tp_ms = {0.0, 1000.0};
@@ -391,7 +392,7 @@ TEST(LiChiangBench, WritesItsReportAndTheCasesBehave) {
   EXPECT_NE(md.find("## Target"), std::string::npos);
   EXPECT_GT(std::filesystem::file_size(dir.file("results/lichiang/cases.csv")), 0u);
   EXPECT_EQ(s["over_budget"].get<int>(), 0);
-  EXPECT_EQ(s["compared"].get<int>(), 2);  // the page cache, and the slow disk
+  EXPECT_EQ(s["compared"].get<int>(), 3);  // the page cache, the slow disk, the object database
   EXPECT_EQ(s["tp_walks"].get<int>(), 2);
   EXPECT_GT(std::filesystem::file_size(dir.file("results/lichiang/tp-stalls.svg")), 0u);
   EXPECT_NE(md.find("allowable prefetching time"), std::string::npos);
@@ -404,6 +405,11 @@ TEST(LiChiangBench, WritesItsReportAndTheCasesBehave) {
   EXPECT_EQ(cases["lichiang:cache=none,prefetch=none"]["stall_frames"].get<uint64_t>(), uint64_t(p.frames));
   EXPECT_EQ(cases["lichiang:cache=none,prefetch=none"]["hit_ratio"].get<double>(), 0.0);  // nothing kept across frames
   EXPECT_GT(cases["lichiang:cache=lru,prefetch=none"]["hit_ratio"].get<double>(), 0.5);
+  const auto& sqlite = s["40 objects"]["sqlite"]["100.0"]["normal"];
+  ASSERT_EQ(sqlite.size(), lichiang_cases().size());
+  EXPECT_EQ(sqlite["lichiang:cache=lru,prefetch=none"]["bytes_read"].get<uint64_t>(), lru);
+  EXPECT_EQ(sqlite["lichiang:cache=lru,prefetch=none"]["hit_ratio"], cases["lichiang:cache=lru,prefetch=none"]["hit_ratio"]);
+  EXPECT_NE(md.find("| sqlite |"), std::string::npos);
 }
 
 }  // namespace

@@ -30,7 +30,7 @@ void register_bench_lichiang(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--frames", p.frames, "Frames of each path")->capture_default_str()->check(integer_in(2, 100000));
   cmd->add_option("--path-seed", p.path_seed, "The paths' seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--cache-fraction", p.cache_fractions, "The cache shares of the budget, as fractions of the world's geometry")->capture_default_str()->check(number_in(1e-6, 1));
-  cmd->add_option("--disk", p.disks, "Storage the cases also run on, each world's first path: direct (page cache bypassed), slow (bypassed, with --read-latency-ms)")->capture_default_str()->check(CLI::IsMember({"cached", "direct", "slow"}));
+  cmd->add_option("--storage", p.storages, "Storage the cases also run on, each world's first path: direct (page cache bypassed), slow (bypassed, with --read-latency-ms), sqlite (the object database)")->capture_default_str()->check(CLI::IsMember({"direct", "slow", "sqlite"}));
   cmd->add_option("--read-latency-ms", p.read_latency_ms, "The slow disk's wait before every read, ms")->capture_default_str()->check(number_in(0, 1000));
   cmd->add_option("--plot-fraction", p.plot_fractions, "Cache shares of the cache-size against prefetch-time plot")->capture_default_str()->check(number_in(1e-6, 1));
   cmd->add_option("--plot-tp", p.plot_tp_ms, "Allowable prefetching times t_p of that plot, ms a frame")->capture_default_str()->check(number_in(0, 1e6));

@@ -14,6 +14,20 @@
 
 namespace cellwalk::app {
 
+// The planned free space. When the planner was not asked for (the world's own graph is
+// unusable) and nothing can be walked on floors, as around a lone model without a ground, it
+// flies instead, with a note; what the user asked for fails as asked.
+PlannedSpace plan_or_fly(const World& world, PlannerOptions options, bool may_fly) {
+  if (!may_fly || options.fly) return plan_free_space(world, options);
+  try {
+    return plan_free_space(world, options);
+  } catch (const Error&) {
+    std::printf("path: no floor to walk on; flying through the free space instead (--planner --fly)\n");
+    options.fly = true;
+    return plan_free_space(world, options);
+  }
+}
+
 void register_path(CLI::App& root) {
   auto* cmd = root.add_subcommand("path", "Generate a camera path in a world's streets or, planned, its free space");
   struct Args {
@@ -62,7 +76,7 @@ void register_path(CLI::App& root) {
       fail(args->scene, "the planner needs the world's triangles; build the scene (cellwalk build) and plan on the world file");
     CameraPath path;
     if (plan) {
-      const PlannedSpace space = plan_free_space(*world, args->planning);
+      const PlannedSpace space = plan_or_fly(*world, args->planning, !args->planner);
       const PlannerOptions& o = space.options;
       std::printf("path: planned %zu nodes, %zu edges of free space (of %llu grid points, %llu free) in %.2f s "
                   "(+%.2f s loading); eye height %.3g, clearance %.3g, spacing %.3g, reach %.3g%s\n",

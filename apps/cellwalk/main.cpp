@@ -42,6 +42,7 @@ int main(int argc, char** argv) {
   cellwalk::app::register_build(root);
   cellwalk::app::register_info(root);
   cellwalk::app::register_verify(root);
+  cellwalk::app::register_db(root);
   cellwalk::app::register_pvs(root);
   cellwalk::app::register_visual_build(root);
   cellwalk::app::register_stratify(root);

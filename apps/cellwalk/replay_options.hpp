@@ -28,6 +28,7 @@ struct ReplayOptions {
   double eta = 0.001;
   uint64_t polygon_budget = 20000;
   bool no_dov_levels = false;
+  std::string objects_db;
   bool json = false;
   bool bypass_cache = false;
   double read_latency_ms = 0;
@@ -50,6 +51,8 @@ struct ReplayOptions {
     cmd.add_option("--eta", eta, "hdov-vsc: DoV threshold η (HDoV thesis §5.3)")->capture_default_str()->check(number_in(0, 1));
     cmd.add_option("--polygon-budget", polygon_budget, "hdov-pb: triangles per frame (HDoV thesis §6.1.2)")->capture_default_str()->check(integer_in(1, 1000000000));
     cmd.add_flag("--no-dov-levels", no_dov_levels, "hdov-vsc, hdov-pb: no level lowered by DoV (eq. 5.6, PB's λ)");
+    cmd.add_option("--objects-db", objects_db,
+                   "Read objects from this object database (cellwalk db WORLD) instead of the world file");
     cmd.add_flag("--json", json, "Print the summary as JSON");
     cmd.add_flag("--bypass-cache", bypass_cache, "Read the world around the OS page cache (O_DIRECT, else drop-behind)");
     cmd.add_option("--read-latency-ms", read_latency_ms, "A slow disk: wait this long before every read of the world, ms")
@@ -65,7 +68,7 @@ struct ReplayOptions {
   // file, and the path's world (a warning: a path may be reused on purpose).
   CameraPath read_checked_path(const World& opened) const {
     lens.check();
-    refuse_same_files({world, path}, {out});
+    refuse_same_files(objects_db.empty() ? std::vector<std::string>{world, path} : std::vector<std::string>{world, path, objects_db}, {out});
     CameraPath p = read_path(path);
     warn_if_other_world(p, path, opened.info(), world);
     return p;
@@ -104,6 +107,7 @@ struct ReplayOptions {
     options.eta = eta;
     options.polygon_budget = polygon_budget;
     options.dov_levels = !no_dov_levels;
+    options.objects_db = objects_db;
     return options;
   }
 };

@@ -17,6 +17,8 @@
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/scene/path_generator.hpp"
 #include "cellwalk/store/geometry_store.hpp"
+#include "cellwalk/store/level_source.hpp"
+#include "cellwalk/store/object_database.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/lichiang/lichiang_strategy.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
@@ -111,13 +113,22 @@ BenchWorld prepare(const LiChiangBenchParams& p, const bench::WorkDir& dir, uint
 struct CaseRun {
   std::string strategy;
   double mean_ms = 0, sd_ms = 0, prefetch_ms = 0;
+  double io_ms = 0;  // the frames' own reads (a prefetch's are the loader thread's)
   uint64_t hits = 0, misses = 0, stalls = 0, bytes_read = 0, peak = 0, prefetches = 0, frames = 0;
   double hit_ratio() const { return hits + misses ? double(hits) / double(hits + misses) : 0.0; }
   double stall_share() const { return frames ? double(stalls) / double(frames) : 0.0; }
 };
 
-CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& world, const CameraPath& path,
-                  const std::string& strategy_name, const std::string& label) {
+// Where a walk reads objects from: the world (opened through the page cache, around it, or
+// slowly) and, for "sqlite", the object database beside it.
+struct Storage {
+  std::string label;
+  WorldFile::Options options;
+  std::string objects_db;
+};
+
+CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& world, const Storage& storage,
+                  const CameraPath& path, const std::string& strategy_name, const std::string& label) {
   RenderSettings settings;
   settings.width = p.width;
   settings.height = p.height;
@@ -126,6 +137,7 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
   StrategyOptions options;
   options.memory_budget_bytes = budget;
   options.viewport_height_px = float(p.height);
+  options.objects_db = storage.objects_db;
   const std::unique_ptr<Strategy> strategy = make_strategy(strategy_name, world, options);
   Camera lens;
   lens.aspect = float(p.width) / float(p.height);
@@ -142,6 +154,7 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
     r.misses += f.cache_misses;
     r.stalls += f.stall ? 1 : 0;
     r.bytes_read += f.bytes_read;
+    r.io_ms += f.io_ms;
   }
   r.mean_ms = bench::mean(ms);
   r.sd_ms = std::sqrt(bench::variance(ms));
@@ -153,25 +166,27 @@ CaseRun walk_case(const LiChiangBenchParams& p, uint64_t budget, const World& wo
   return r;
 }
 
-// Where the walks read the world from: the file through the OS page cache ("cached"), around
-// it ("direct": O_DIRECT, or drop-behind where the file system refuses it), or around it with
-// a latency before every read ("slow").
-WorldFile::Options disk_options(const std::string& disk, double latency_ms) {
-  if (disk == "cached") return {};
-  if (disk == "direct") return {.bypass_cache = true};
-  if (disk == "slow") return {.bypass_cache = true, .read_latency_us = uint32_t(std::lround(latency_ms * 1000.0))};
-  fail("bench lichiang", "unknown --disk \"" + disk + "\" (cached, direct, slow)");
-}
-
-std::string disk_label(const std::string& disk, double latency_ms) {
-  if (disk == "direct") return "page cache bypassed";
-  if (disk == "slow") return "bypassed, +" + fixed(latency_ms, 1) + " ms a read";
-  return "page cache";
+// The storage a walk reads: the world file through the OS page cache (""), around it
+// ("direct": O_DIRECT, or drop-behind where the file system refuses it), around it with a
+// latency before every read ("slow"), or the SQLite object database ("sqlite", built beside
+// `world_file` when `build` is set).
+Storage storage_of(const std::string& kind, double latency_ms, const std::string& world_file, bool build) {
+  if (kind.empty()) return {"page cache", {}, ""};
+  if (kind == "direct") return {"page cache bypassed", {.bypass_cache = true}, ""};
+  if (kind == "slow")
+    return {"bypassed, +" + fixed(latency_ms, 1) + " ms a read",
+            {.bypass_cache = true, .read_latency_us = uint32_t(std::lround(latency_ms * 1000.0))}, ""};
+  if (kind == "sqlite") {
+    const std::string db = world_file + ".sqlite";
+    if (build) build_object_database(World(world_file), db);
+    return {"sqlite", {}, db};
+  }
+  fail("bench lichiang", "unknown --storage \"" + kind + "\" (direct, slow, sqlite)");
 }
 
 const std::vector<std::string> kCasesHeader = {"world", "storage", "cache % of world", "path", "case", "frame ms mean", "sd",
-                                               "hit ratio %", "stall frames", "stall %", "MiB read", "prefetch requests",
-                                               "peak / budget MiB"};
+                                               "hit ratio %", "stall frames", "stall %", "MiB read", "I/O ms a miss",
+                                               "prefetch requests", "peak / budget MiB"};
 
 // The walks' tables and the target's tally, as they are run.
 struct Results {
@@ -182,13 +197,16 @@ struct Results {
   std::map<std::string, PlotSeries> tp_stalls, tp_hits, tp_frame;  // by cache share
 };
 
-uint64_t budget_of(const BenchWorld& w, double fraction) { return w.fixed_bytes + uint64_t(fraction * double(w.geometry_bytes)); }
+// The fixed parts, the object database's bound over sqlite, and the cache share.
+uint64_t budget_of(const BenchWorld& w, const World& world, const Storage& storage, double fraction) {
+  return w.fixed_bytes + level_source_bound(world, storage.objects_db) + uint64_t(fraction * double(w.geometry_bytes));
+}
 
 void add_case_row(Results& out, const BenchWorld& w, const std::string& storage, const std::string& share, const std::string& kind,
                   const CaseRun& r, uint64_t budget) {
   out.cases.push_back({w.name, storage, share, kind, r.strategy, fixed(r.mean_ms, 1), fixed(r.sd_ms, 1), fixed(100 * r.hit_ratio(), 2),
                        std::to_string(r.stalls), fixed(100.0 * r.stall_share(), 2), fixed(double(r.bytes_read) / kMiB, 1),
-                       std::to_string(r.prefetches), fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
+                       fixed(r.misses ? r.io_ms / double(r.misses) : 0.0, 3), std::to_string(r.prefetches), fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
   out.summary[w.name][storage][share][kind][r.strategy] = {
       {"frame_ms", r.mean_ms}, {"sd_ms", r.sd_ms}, {"hit_ratio", r.hit_ratio()}, {"stall_frames", r.stalls},
       {"bytes_read", r.bytes_read}, {"peak_bytes", r.peak}, {"budget_bytes", budget}};
@@ -196,35 +214,35 @@ void add_case_row(Results& out, const BenchWorld& w, const std::string& storage,
 }
 
 // The seed's four cases on one path; the target compares case 4 with case 3.
-void walk_cases(const LiChiangBenchParams& p, const BenchWorld& w, const World& world, const std::string& storage, double fraction,
+void walk_cases(const LiChiangBenchParams& p, const BenchWorld& w, const World& world, const Storage& storage, double fraction,
                 const std::string& kind, Results& out) {
-  const uint64_t budget = budget_of(w, fraction);
+  const uint64_t budget = budget_of(w, world, storage, fraction);
   const std::string share = fixed(100 * fraction, 1);
   std::vector<CaseRun> runs;
   for (const std::string& c : lichiang_cases()) {
-    runs.push_back(walk_case(p, budget, world, w.paths.at(kind), c, w.name + ", " + storage + ", " + share + " %, " + kind + ", " + c));
-    add_case_row(out, w, storage, share, kind, runs.back(), budget);
+    runs.push_back(walk_case(p, budget, world, storage, w.paths.at(kind), c, w.name + ", " + storage.label + ", " + share + " %, " + kind + ", " + c));
+    add_case_row(out, w, storage.label, share, kind, runs.back(), budget);
   }
   const CaseRun &one_step = runs[2], &hybrid = runs[3];
   const bool beats = hybrid.stalls <= one_step.stalls && hybrid.hit_ratio() >= one_step.hit_ratio() &&
                      (hybrid.stalls < one_step.stalls || hybrid.hit_ratio() > one_step.hit_ratio());
   ++out.compared;
   out.beaten += beats;
-  out.target_rows += "| " + w.name + " | " + storage + " | " + share + " | " + kind + " | " + std::to_string(one_step.stalls) +
+  out.target_rows += "| " + w.name + " | " + storage.label + " | " + share + " | " + kind + " | " + std::to_string(one_step.stalls) +
                      " → " + std::to_string(hybrid.stalls) + " | " + fixed(100 * one_step.hit_ratio(), 2) + " → " +
                      fixed(100 * hybrid.hit_ratio(), 2) + " | " + (beats ? "yes" : "**no**") + " |\n";
 }
 
 // The seed's future work: case 4 with t_p on the frame's thread, over cache shares × t_p.
-void walk_tp_grid(const LiChiangBenchParams& p, const BenchWorld& w, const World& world, const std::string& storage, Results& out) {
+void walk_tp_grid(const LiChiangBenchParams& p, const BenchWorld& w, const World& world, const Storage& storage, Results& out) {
   const std::string& kind = p.path_kinds.front();
   for (const double fraction : p.plot_fractions) {
-    const uint64_t budget = budget_of(w, fraction);
+    const uint64_t budget = budget_of(w, world, storage, fraction);
     const std::string share = fixed(100 * fraction, 1);
     for (const double tp : p.plot_tp_ms) {
       const std::string name = "lichiang:tp_ms=" + fixed(tp, tp == std::floor(tp) ? 0 : 2);
-      const CaseRun r = walk_case(p, budget, world, w.paths.at(kind), name, w.name + ", " + storage + ", " + share + " %, t_p " + fixed(tp, 1) + " ms");
-      out.tp.push_back({w.name, storage, share, kind, fixed(tp, 1), fixed(r.mean_ms, 1), fixed(r.sd_ms, 1),
+      const CaseRun r = walk_case(p, budget, world, storage, w.paths.at(kind), name, w.name + ", " + storage.label + ", " + share + " %, t_p " + fixed(tp, 1) + " ms");
+      out.tp.push_back({w.name, storage.label, share, kind, fixed(tp, 1), fixed(r.mean_ms, 1), fixed(r.sd_ms, 1),
                         fixed(r.frames ? r.prefetch_ms / double(r.frames) : 0.0, 2), fixed(100 * r.hit_ratio(), 2),
                         std::to_string(r.stalls), fixed(100.0 * r.stall_share(), 2),
                         fixed(double(r.peak) / kMiB, 2) + " / " + fixed(double(budget) / kMiB, 2)});
@@ -279,9 +297,12 @@ std::string report(const LiChiangBenchParams& p, const std::vector<BenchWorld>& 
         "97.7 / 103.8 ms (sd 133.6 / 52.6 / 51.8 / 46), hit ratio — / 90.9 / 90.8 / 95.2 % for cases 1–4.\n\n";
   md += "## The cases\n\nStorage: the world file read through the OS page cache, then, on each world's " + p.path_kinds.front() +
         " path, ";
-  std::string disks;
-  for (const std::string& d : p.disks) disks += (disks.empty() ? "" : "; ") + disk_label(d, p.read_latency_ms);
-  md += (disks.empty() ? "nothing else" : disks) + ".\n\n" + bench::md_table(kCasesHeader, r.cases, bench::Align::kFigures);
+  std::string others;
+  for (const std::string& kind : p.storages) others += (others.empty() ? "" : "; ") + storage_of(kind, p.read_latency_ms, "", false).label;
+  md += (others.empty() ? "nothing else" : others) + ".\n\n" + bench::md_table(kCasesHeader, r.cases, bench::Align::kFigures);
+  md += "\nsqlite: the store reads objects from the object database of `cellwalk db`, one prepared query per object, as the "
+        "seed's DBMS over JDBC; its budget holds the database's bound besides. I/O ms a miss: the frames' own read time over "
+        "their misses (a prefetch reads on the loader thread).\n";
   md += "\nA stall frame read geometry it had to draw. The hit ratio is of the store's requests for geometry to draw "
         "(a prefetched object found resident is a hit; one still loading, a miss).\n";
   md += "\n## Target: hybrid + relevance against LRU + one-step, on stall frames and hit ratio\n\n"
@@ -310,7 +331,7 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
       if (!(f > 0.0 && f <= 1.0)) fail("bench lichiang", "cache fraction " + fixed(f, 3) + " is not in (0, 1]");
   for (const double tp : p.plot_tp_ms)
     if (!(tp >= 0.0 && tp <= 1e6)) fail("bench lichiang", "--plot-tp " + fixed(tp, 3) + " is not in [0, 1e6] ms");
-  for (const std::string& d : p.disks) disk_options(d, p.read_latency_ms);
+  for (const std::string& kind : p.storages) storage_of(kind, p.read_latency_ms, "", false);
   for (const std::string& kind : p.path_kinds) parse_session_kind(kind);
   const auto start = bench::Clock::now();
   const bench::WorkDir dir(p.work_dir, "lichiang");
@@ -320,22 +341,25 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
   const std::unique_ptr<GlContext> context = GlContext::headless();
   Results r;
   for (const BenchWorld& w : worlds) {
+    const Storage cached = storage_of("", p.read_latency_ms, w.file, false);
     const World world(w.file);
     for (const double fraction : p.cache_fractions)
-      for (const std::string& kind : p.path_kinds) walk_cases(p, w, world, disk_label("cached", 0), fraction, kind, r);
-    for (const std::string& disk : p.disks) {
-      const World on_disk(w.file, disk_options(disk, p.read_latency_ms));
-      for (const double fraction : p.cache_fractions)
-        walk_cases(p, w, on_disk, disk_label(disk, p.read_latency_ms), fraction, p.path_kinds.front(), r);
+      for (const std::string& kind : p.path_kinds) walk_cases(p, w, world, cached, fraction, kind, r);
+    for (const std::string& kind : p.storages) {
+      const Storage storage = storage_of(kind, p.read_latency_ms, w.file, true);
+      const World on(w.file, storage.options);
+      for (const double fraction : p.cache_fractions) walk_cases(p, w, on, storage, fraction, p.path_kinds.front(), r);
     }
   }
+  // On the slow disk where there is one: there a miss costs what it cost the seed.
   if (!p.plot_fractions.empty() && !p.plot_tp_ms.empty()) {
     const BenchWorld& largest = *std::max_element(worlds.begin(), worlds.end(), [](const BenchWorld& a, const BenchWorld& b) {
       return a.objects < b.objects;
     });
-    const std::string disk = p.disks.empty() ? "cached" : p.disks.back();
-    const World world(largest.file, disk_options(disk, p.read_latency_ms));
-    walk_tp_grid(p, largest, world, disk_label(disk, p.read_latency_ms), r);
+    const bool slow = std::find(p.storages.begin(), p.storages.end(), "slow") != p.storages.end();
+    const Storage storage = storage_of(slow ? "slow" : "", p.read_latency_ms, largest.file, false);
+    const World world(largest.file, storage.options);
+    walk_tp_grid(p, largest, world, storage, r);
   }
 
   const fs::path out = fs::path(p.out_dir), sub = out / "lichiang";

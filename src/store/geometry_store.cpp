@@ -29,22 +29,24 @@ uint64_t largest_load(const World& world) {
 // The cache's own limit leaves room for one load in flight, so what is cached plus what is
 // being read and decoded never passes the caller's budget.
 GeometryStore::GeometryStore(const World& world, uint64_t budget_bytes, std::unique_ptr<ReplacementPolicy> policy,
-                             unsigned loads_in_flight)
+                             unsigned loads_in_flight, std::unique_ptr<LevelSource> source)
     : world_(world),
+      source_(source ? std::move(source) : world_level_source(world)),
       load_headroom_(largest_load(world) * std::max(1u, loads_in_flight)),
       budget_(budget_bytes == 0 ? 0 : budget_bytes > load_headroom_ ? budget_bytes - load_headroom_ : 1),
-      directory_bytes_(world.resident_bytes()) {
-  if (budget_bytes != 0 && budget_bytes < fixed_bytes(world, loads_in_flight))
-    fail(world.file().path(), "memory budget of " + byte_size_text(budget_bytes) +
-                                  " is too small: the world's directory and its largest level need " +
-                                  byte_size_text(fixed_bytes(world, loads_in_flight)) + "; give a larger --budget");
+      directory_bytes_(world.resident_bytes() + source_->resident_bound()) {
+  const uint64_t fixed = fixed_bytes(world, loads_in_flight, source_->resident_bound());
+  if (budget_bytes != 0 && budget_bytes < fixed)
+    fail(world.file().path(), "memory budget of " + byte_size_text(budget_bytes) + " is too small: the world's directory" +
+                                  (source_->resident_bound() ? ", the object database's cache" : "") +
+                                  " and its largest level need " + byte_size_text(fixed) + "; give a larger --budget");
   if (!budget_.try_reserve(directory_bytes_)) fail(world.file().path(), "internal: directory does not fit the budget");
   buffer_ = std::make_unique<BufferManager>(budget_, policy ? std::move(policy) : make_lru_policy());
   peak_ = resident_bytes();
 }
 
-uint64_t GeometryStore::fixed_bytes(const World& world, unsigned loads_in_flight) {
-  return world.resident_bytes() + largest_load(world) * std::max(1u, loads_in_flight);
+uint64_t GeometryStore::fixed_bytes(const World& world, unsigned loads_in_flight, uint64_t source_bytes) {
+  return world.resident_bytes() + source_bytes + largest_load(world) * std::max(1u, loads_in_flight);
 }
 
 GeometryStore::~GeometryStore() {
@@ -61,14 +63,14 @@ void GeometryStore::raise_peak(uint64_t bytes) {
 // loads on two threads each counts itself, and the budget keeps room for both.
 LoadedItem GeometryStore::load(ObjectId id, uint32_t level, FetchStats& stats) {
   Stopwatch watch;
-  auto bytes = world_.read_level(id, level);
+  auto bytes = source_->read_level(id, level);
   stats.io_ms += watch.lap_ms();
   stats.bytes_read += bytes.size();
   auto mesh = std::make_shared<const Mesh>(world_.decode_level(id, level, bytes));
   stats.decode_ms += watch.lap_ms();
   const uint64_t mesh_bytes = sizeof(Mesh) + mesh->byte_size();
   if (mesh_bytes > decoded_bound(mesh->triangle_count()))
-    fail(world_.file().path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
+    fail(source_->path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
          "decodes to unreferenced vertices (the file is damaged)");
   raise_peak(budget_.used() + bytes.size() + mesh_bytes);
   return {mesh, mesh_bytes};

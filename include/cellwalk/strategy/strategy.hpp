@@ -69,6 +69,10 @@ struct StrategyOptions {
   bool dov_levels = true;
   // hdov-vsc, hdov-pb, conv: the k-d scene tree file ("" = WORLD.scenetree, built on first use).
   std::string scene_tree_file;
+  // Where every strategy's geometry store reads levels from: "" = the world file; otherwise an
+  // object database built from the world (`cellwalk db`, store/object_database.hpp), its cache
+  // charged to memory_budget_bytes.
+  std::string objects_db;
 };
 
 }  // namespace cellwalk

@@ -5,7 +5,7 @@
 namespace cellwalk {
 
 BruteStrategy::BruteStrategy(const World& world, const StrategyOptions& options, bool cull)
-    : world_(world), store_(world, options.memory_budget_bytes), cull_(cull) {}
+    : world_(world), store_(world, options.memory_budget_bytes, nullptr, 1, open_level_source(world, options.objects_db)), cull_(cull) {}
 
 void BruteStrategy::select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) {
   Stopwatch watch;

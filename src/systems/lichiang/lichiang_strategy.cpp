@@ -115,7 +115,7 @@ struct LiChiangStrategy::Impl {
         pvs(open_sets(w)),
         store(w, o.memory_budget_bytes,
               c.cache == LiChiangConfig::Cache::kHybrid ? make_hybrid_relevance_policy() : make_lru_policy(),
-              c.prefetch != Prefetch::kNone ? 2 : 1),
+              c.prefetch != Prefetch::kNone ? 2 : 1, open_level_source(w, o.objects_db)),
         // One loader thread, one load at a time: the store keeps room for it beside get()'s. In
         // the seed's cycle (tp_ms, frame_ms) the frame's thread steps it instead.
         prefetcher(store.buffer(), PrefetcherOptions{c.prefetch != Prefetch::kNone && !c.prefetch_in_frame() ? 1u : 0u, 1}) {

@@ -55,7 +55,8 @@ SceneTreeStrategy::SceneTreeStrategy(const World& world, const StrategyOptions& 
     fail(name() + " --budget", "the scene tree, its internal LODs and visibility data need " +
                                    byte_size_text(fixed_bytes_) + " resident, more than the budget of " +
                                    byte_size_text(budget) + "; give a larger --budget");
-  store_ = std::make_unique<GeometryStore>(world, budget > 0 ? budget - fixed_bytes_ : 0);
+  store_ = std::make_unique<GeometryStore>(world, budget > 0 ? budget - fixed_bytes_ : 0, nullptr, 1,
+                                           open_level_source(world, options.objects_db));
 }
 
 SceneTreeStrategy::~SceneTreeStrategy() = default;

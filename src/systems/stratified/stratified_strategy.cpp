@@ -222,7 +222,7 @@ class CellLoader {
 
 struct StratifiedStrategy::Impl {
   Impl(const World& w, const StratifiedConfig& c, const StrategyOptions& o)
-      : world(w), config(c), stored(w), store(w, o.memory_budget_bytes) {
+      : world(w), config(c), stored(w), store(w, o.memory_budget_bytes, nullptr, 1, open_level_source(w, o.objects_db)) {
     index_bytes = stored.resident_bytes();
     if (!store.buffer().budget().try_reserve(index_bytes))
       fail("stratified", "the memory budget cannot hold the stored cells and near lists (" + std::to_string(index_bytes) +

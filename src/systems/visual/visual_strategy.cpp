@@ -67,7 +67,8 @@ struct VisualStrategy::Impl {
     const uint64_t rest = budget > 0 ? budget - fixed : 0;
     lod_budget = std::make_unique<MemoryBudget>(rest / 4);
     lods = std::make_unique<BufferManager>(*lod_budget, make_dov_time_policy());
-    store = std::make_unique<GeometryStore>(w, budget > 0 ? rest - rest / 4 : 0, make_dov_time_policy());
+    store = std::make_unique<GeometryStore>(w, budget > 0 ? rest - rest / 4 : 0, make_dov_time_policy(), 1,
+                                            open_level_source(w, options.objects_db));
   }
 
   uint64_t resident() const {

@@ -60,7 +60,7 @@ struct VlodStrategy::Impl {
         config(c),
         options(o),
         vlod(w),
-        store(w, o.memory_budget_bytes, nullptr, c.prefetch ? 2 : 1),
+        store(w, o.memory_budget_bytes, nullptr, c.prefetch ? 2 : 1, open_level_source(w, o.objects_db)),
         prefetcher(store.buffer(), PrefetcherOptions{c.prefetch ? 1u : 0u, 1}) {
     index_bytes = vlod.resident_bytes();
     if (!store.buffer().budget().try_reserve(index_bytes))
