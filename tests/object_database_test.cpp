@@ -129,7 +129,21 @@ TEST(ObjectDatabase, DamagedDatabasesGiveOneClearError) {
   expect_refused("rebuild it with");  // not an SQLite file
   fresh();
   execute(db, "DROP TABLE levels");
-  expect_refused("not a cellwalk object database of this version");
+  expect_refused("not a cellwalk object database");
+  // Hostile schemas: a view in place of a table (one that never ends) or a table of its own.
+  fresh();
+  execute(db, "DROP TABLE meta; CREATE VIEW meta(key, value) AS WITH RECURSIVE r(x) AS (SELECT 1 UNION ALL "
+              "SELECT x + 1 FROM r) SELECT 'k', x FROM r");
+  expect_refused("a view \"meta\"");
+  fresh();
+  execute(db, "CREATE TABLE extra(x)");
+  expect_refused("a table \"extra\"");
+  // Two rows' keys swapped: each key finds the other's bytes, which its hash refuses.
+  fresh();
+  execute(db, "UPDATE levels SET object = -1 WHERE object = 2 AND level = 0; "
+              "UPDATE levels SET object = 2 WHERE object = 3 AND level = 0; "
+              "UPDATE levels SET object = 3 WHERE object = -1 AND level = 0");
+  expect_refused("object 2 level 0: the row");
   fresh();
   execute(db, "DELETE FROM levels WHERE object = 3 AND level = 0");
   expect_refused("object 3 level 0: no such row");

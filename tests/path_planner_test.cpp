@@ -277,7 +277,9 @@ TEST(PathPlanner, TheCommandPlansWhenTheWorldsGraphIsAnImportLoop) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("flying"), std::string::npos) << r.output;
   // Bad values and planner options without --planner are refused with one line.
-  for (const char* args : {" --planner --clearance -1", " --planner --spacing nan", " --clearance 0.1"}) {
+  // A grid too fine, in columns or (flying) in layers, is refused before anything is allocated.
+  for (const char* args : {" --planner --clearance -1", " --planner --spacing nan", " --clearance 0.1",
+                           " --planner --spacing 1e-20", " --planner --fly --spacing 0.0001"}) {
     r = test::run_cellwalk("path " + world + std::string(args) + " -o " + path);
     EXPECT_NE(r.exit_code, 0) << args;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;

@@ -3,6 +3,7 @@
 // graph does not lie in it, as an import's loop does not).
 #include <cstdio>
 #include <optional>
+#include <string>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/precompute/path_planner.hpp"
@@ -21,7 +22,8 @@ PlannedSpace plan_or_fly(const World& world, PlannerOptions options, bool may_fl
   if (!may_fly || options.fly) return plan_free_space(world, options);
   try {
     return plan_free_space(world, options);
-  } catch (const Error&) {
+  } catch (const Error& e) {
+    if (std::string(e.what()).find("no free space to walk") == std::string::npos) throw;
     std::printf("path: no floor to walk on; flying through the free space instead (--planner --fly)\n");
     options.fly = true;
     return plan_free_space(world, options);

@@ -10,7 +10,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <limits>
 #include <numeric>
+#include <string>
 
 #include "cellwalk/core/error.hpp"
 #include "precompute/embree_scene.hpp"
@@ -62,9 +65,15 @@ Grid make_grid(const Aabb& bounds, const PlannerOptions& o) {
   g.spacing = o.spacing;
   const double wx = size.x + 2 * margin, wz = size.z + 2 * margin;
   const double nx = std::floor(wx / o.spacing) + 1, nz = std::floor(wz / o.spacing) + 1;
-  if (nx * nz > static_cast<double>(kMaxCandidates))
-    fail("path planner", "a grid of " + std::to_string(static_cast<uint64_t>(nx)) + " × " +
-                             std::to_string(static_cast<uint64_t>(nz)) + " columns is too fine; raise --spacing");
+  // Flying, each column holds a point every spacing up the world's height.
+  const double ny = o.fly ? std::max(1.0, std::floor((size.y - o.eye_height) / o.spacing) + 1) : 1.0;
+  if (nx * nz * ny > static_cast<double>(kMaxCandidates)) {
+    char what[160];
+    std::snprintf(what, sizeof what, "a grid of %.3g x %.3g columns%s (%.3g points) is too fine; raise --spacing", nx, nz,
+                  o.fly ? (" x " + std::to_string(static_cast<int>(std::min(ny, 1e9))) + " layers").c_str() : "",
+                  nx * nz * ny);
+    fail("path planner", what);
+  }
   g.nx = static_cast<int>(nx);
   g.nz = static_cast<int>(nz);
   const Vec3 c = bounds.center();
@@ -176,14 +185,20 @@ PlannedSpace plan_free_space(const World& world, const PlannerOptions& given) {
     for (const Candidate& k : cs) {
       const float above = k.floor + 0.5f * static_cast<float>(o.eye_height);
       if (scene.clear(k.position, k.position, clearance) && !scene.inside_any(k.position) &&
-          scene.distance_above(k.position, static_cast<float>(o.reach), above) < o.reach)
+          scene.distance_above(k.position, static_cast<float>(o.reach), above) < static_cast<float>(o.reach))
         free[c].push_back(k.position);
     }
     std::sort(free[c].begin(), free[c].end(), [](const Vec3& a, const Vec3& b) { return a.y < b.y; });
   });
 
   // Number the free nodes column by column.
+  // Walking, a column may hold several floors: the free nodes are bounded as the grid is.
   std::vector<uint32_t> first(columns + 1, 0);
+  uint64_t free_nodes = 0;
+  for (size_t c = 0; c < columns; ++c) free_nodes += free[c].size();
+  if (free_nodes > kMaxCandidates)
+    fail("path planner", std::to_string(free_nodes) + " free points on the grid's floors are more than " +
+                             std::to_string(kMaxCandidates) + "; raise --spacing");
   for (size_t c = 0; c < columns; ++c) {
     first[c + 1] = first[c] + static_cast<uint32_t>(free[c].size());
     result.candidates += tested[c];

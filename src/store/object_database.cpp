@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -49,6 +50,12 @@ uint64_t directory_hash(const World& world) {
   const uint64_t hash = XXH3_64bits_digest(state);
   XXH3_freeState(state);
   return hash;
+}
+
+// A row's hash is seeded with its key, so the bytes of one (object, level) under another's key
+// (a hostile edit, or keys swapped by damage) do not match.
+uint64_t row_hash(const std::vector<uint8_t>& bytes, ObjectId id, uint32_t level) {
+  return XXH3_64bits_withSeed(bytes.data(), bytes.size(), (uint64_t(id) << 32) | level);
 }
 
 uint64_t level_count(const World& world) {
@@ -134,16 +141,20 @@ ObjectDatabase::ObjectDatabase(const World& world, std::string path)
     sqlite3_db_config(db_, SQLITE_DBCONFIG_DEFENSIVE, 1, nullptr);
     sqlite3_db_config(db_, SQLITE_DBCONFIG_TRUSTED_SCHEMA, 0, nullptr);
     sqlite3_limit(db_, SQLITE_LIMIT_LENGTH,
-                  static_cast<int>(std::max<uint64_t>(largest_level_bytes(world), 4096)));
+                  static_cast<int>(std::clamp<uint64_t>(largest_level_bytes(world), 4096, INT32_MAX)));
+    // Only the two tables `cellwalk db` writes are ever queried, with statements of our own.
+    sqlite3_limit(db_, SQLITE_LIMIT_SQL_LENGTH, 4096);
+    sqlite3_limit(db_, SQLITE_LIMIT_COMPOUND_SELECT, 2);
     const std::string pragmas =
         "PRAGMA mmap_size=0; PRAGMA cell_size_check=ON; PRAGMA cache_size=-" +
         std::to_string(kObjectDatabaseCacheBytes / 1024) + ";";
     if ((rc = sqlite3_exec(db_, pragmas.c_str(), nullptr, nullptr, nullptr)) != SQLITE_OK)
       fail_sqlite(path_, rc, "setting up the connection");
 
+    check_schema();
     // The metadata: format, version and the world it was built from.
     Statement meta;
-    if ((rc = sqlite3_prepare_v2(db_, "SELECT key, value FROM meta", -1, &meta.stmt, nullptr)) !=
+    if ((rc = sqlite3_prepare_v2(db_, "SELECT key, value FROM meta LIMIT 16", -1, &meta.stmt, nullptr)) !=
         SQLITE_OK)
       fail_sqlite(path_, rc, "reading its metadata");
     std::string format;
@@ -184,7 +195,7 @@ ObjectDatabase::ObjectDatabase(const World& world, std::string path)
                       "); " + rebuild_hint(world));
     }
     if ((rc = sqlite3_prepare_v3(db_,
-                                 "SELECT hash, bytes FROM levels WHERE object = ?1 AND level = ?2",
+                                 "SELECT hash, bytes, object, level FROM levels WHERE object = ?1 AND level = ?2",
                                  -1, SQLITE_PREPARE_PERSISTENT, &read_, nullptr)) != SQLITE_OK)
       fail_sqlite(path_, rc, "preparing the level query");
   } catch (...) {
@@ -192,6 +203,29 @@ ObjectDatabase::ObjectDatabase(const World& world, std::string path)
     sqlite3_close(db_);
     throw;
   }
+}
+
+// A hostile file can make `meta` or `levels` a view whose query never ends or fills memory:
+// before any other query, the schema must be the two tables `cellwalk db` writes and their
+// primary-key indexes, nothing else.
+void ObjectDatabase::check_schema() const {
+  Statement schema;
+  int rc = sqlite3_prepare_v2(db_, "SELECT type, name FROM sqlite_schema LIMIT 8", -1, &schema.stmt, nullptr);
+  if (rc != SQLITE_OK) fail_sqlite(path_, rc, "reading its schema");
+  int tables = 0, rows = 0;
+  while ((rc = sqlite3_step(schema.stmt)) == SQLITE_ROW) {
+    ++rows;
+    const auto* type = reinterpret_cast<const char*>(sqlite3_column_text(schema.stmt, 0));
+    const auto* name = reinterpret_cast<const char*>(sqlite3_column_text(schema.stmt, 1));
+    const std::string t = type ? type : "", n = name ? name : "";
+    if (t == "table" && (n == "meta" || n == "levels")) ++tables;
+    else if (!(t == "index" && n.rfind("sqlite_autoindex_", 0) == 0))
+      fail(path_, "holds " + (t.empty() ? "an entry" : "a " + t) + " \"" + n +
+                      "\" that no object database has (the file is damaged or not ours); " + rebuild_hint(world_));
+  }
+  if (rc != SQLITE_DONE) fail_sqlite(path_, rc, "reading its schema");
+  if (tables != 2 || rows > 4)
+    fail(path_, "is not a cellwalk object database (it needs exactly the tables meta and levels); " + rebuild_hint(world_));
 }
 
 ObjectDatabase::~ObjectDatabase() {
@@ -213,6 +247,10 @@ std::vector<uint8_t> ObjectDatabase::read_level(ObjectId id, uint32_t level) con
   const int rc = sqlite3_step(read_);
   if (rc == SQLITE_DONE) fail(where, "no such row in the object database; " + rebuild_hint(world_));
   if (rc != SQLITE_ROW) fail_sqlite(where, rc, "reading the row");
+  // A damaged index can point at another object's row: the row must name what was asked for.
+  if (sqlite3_column_int64(read_, 2) != int64_t(id) || sqlite3_column_int64(read_, 3) != int64_t(level))
+    fail(where, "the index found the row of object " + std::to_string(sqlite3_column_int64(read_, 2)) + " level " +
+                    std::to_string(sqlite3_column_int64(read_, 3)) + " (the database is damaged); " + rebuild_hint(world_));
   if (sqlite3_column_type(read_, 1) != SQLITE_BLOB && l.bytes != 0)
     fail(where,
          "the row's bytes are not a blob (the database is damaged); " + rebuild_hint(world_));
@@ -223,7 +261,7 @@ std::vector<uint8_t> ObjectDatabase::read_level(ObjectId id, uint32_t level) con
                     std::to_string(l.bytes) + " (the database is damaged or stale); " +
                     rebuild_hint(world_));
   std::vector<uint8_t> bytes(blob, blob + size);
-  if (XXH3_64bits(bytes.data(), bytes.size()) !=
+  if (row_hash(bytes, id, level) !=
       static_cast<uint64_t>(sqlite3_column_int64(read_, 0)))
     fail(where, "the row's bytes do not match its hash (the database is damaged); " +
                     rebuild_hint(world_));
@@ -269,7 +307,7 @@ ObjectDatabaseBuild build_object_database(const World& world, const std::string&
           sqlite3_bind_int64(insert.stmt, 2, level);
           sqlite3_bind_int64(insert.stmt, 3, world.lod(id, level).triangles);
           sqlite3_bind_int64(insert.stmt, 4,
-                             static_cast<int64_t>(XXH3_64bits(bytes.data(), bytes.size())));
+                             static_cast<int64_t>(row_hash(bytes, id, level)));
           sqlite3_bind_blob64(insert.stmt, 5, bytes.data(), bytes.size(), SQLITE_STATIC);
           check(sqlite3_step(insert.stmt), "writing a level");
           sqlite3_reset(insert.stmt);

@@ -63,6 +63,8 @@ class ObjectDatabase final : public LevelSource {
   mutable std::mutex mutex_;
 
   [[noreturn]] void fail_sqlite(const std::string& where, int rc, const std::string& doing) const;
+  // Throws unless the schema is exactly what `cellwalk db` writes.
+  void check_schema() const;
 };
 
 struct ObjectDatabaseBuild {
