@@ -340,6 +340,19 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
 
   const std::unique_ptr<GlContext> context = GlContext::headless();
   Results r;
+  // Written after each world and again at the end, so a run cut short still leaves its report.
+  const fs::path out = fs::path(p.out_dir), sub = out / "lichiang";
+  auto write_outputs = [&] {
+    fs::create_directories(sub);
+    bench::write_csv(sub / "cases.csv", kCasesHeader, r.cases);
+    if (!r.tp.empty()) {
+      bench::write_csv(sub / "tp.csv", kTpHeader, r.tp);
+      write_plot(sub / "tp-stalls.svg", "Stall frames against prefetch time, by cache size", "stall frames, %", r.tp_stalls, 100.0);
+      write_plot(sub / "tp-hits.svg", "Hit ratio against prefetch time, by cache size", "hit ratio, %", r.tp_hits, 100.0);
+      write_plot(sub / "tp-frame.svg", "Frame time against prefetch time, by cache size", "frame time, ms (mean)", r.tp_frame, 0.0);
+    }
+    write_file_atomically((out / "lichiang.md").string(), report(p, worlds, r, bench::seconds_since(start) / 60.0));
+  };
   for (const BenchWorld& w : worlds) {
     const Storage cached = storage_of("", p.read_latency_ms, w.file, false);
     const World world(w.file);
@@ -350,6 +363,7 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
       const World on(w.file, storage.options);
       for (const double fraction : p.cache_fractions) walk_cases(p, w, on, storage, fraction, p.path_kinds.front(), r);
     }
+    write_outputs();
   }
   // On the slow disk where there is one: there a miss costs what it cost the seed.
   if (!p.plot_fractions.empty() && !p.plot_tp_ms.empty()) {
@@ -360,18 +374,8 @@ Json run_lichiang_bench(const LiChiangBenchParams& p) {
     const Storage storage = storage_of(slow ? "slow" : "", p.read_latency_ms, largest.file, false);
     const World world(largest.file, storage.options);
     walk_tp_grid(p, largest, world, storage, r);
+    write_outputs();
   }
-
-  const fs::path out = fs::path(p.out_dir), sub = out / "lichiang";
-  fs::create_directories(sub);
-  bench::write_csv(sub / "cases.csv", kCasesHeader, r.cases);
-  if (!r.tp.empty()) {
-    bench::write_csv(sub / "tp.csv", kTpHeader, r.tp);
-    write_plot(sub / "tp-stalls.svg", "Stall frames against prefetch time, by cache size", "stall frames, %", r.tp_stalls, 100.0);
-    write_plot(sub / "tp-hits.svg", "Hit ratio against prefetch time, by cache size", "hit ratio, %", r.tp_hits, 100.0);
-    write_plot(sub / "tp-frame.svg", "Frame time against prefetch time, by cache size", "frame time, ms (mean)", r.tp_frame, 0.0);
-  }
-  write_file_atomically((out / "lichiang.md").string(), report(p, worlds, r, bench::seconds_since(start) / 60.0));
   Json summary = r.summary;
   summary["beaten"] = r.beaten;
   summary["compared"] = r.compared;
