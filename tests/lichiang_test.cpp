@@ -226,43 +226,42 @@ nlohmann::json summary_of(const test::CommandResult& r) {
 class LiChiangSystem : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new test::TempDir;
-    world_ = dir_->file("city.cww");
-    path_ = dir_->file("city.path");
-    far_path_ = dir_->file("far.path");
-    bare_ = dir_->file("bare.cww");
-    for (const std::string& command : {"generate city --objects 150 --landmark-fraction 0.2 --seed 6 -o " + dir_->file("city.cwscene"),
-                                       "build " + dir_->file("city.cwscene") + " -o " + world_,
-                                       "build " + dir_->file("city.cwscene") + " -o " + bare_,
-                                       "pvs " + world_ + " --engine conservative --cells grid:25",
-                                       "path " + world_ + " --frames 60 --seed 4 -o " + path_,
-                                       "path " + world_ + " --kind fast --frames 400 --seed 4 -o " + far_path_}) {
-      const test::CommandResult r = test::run_cellwalk(command);
-      ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
-    }
+    inputs_ = new test::SharedInputs(
+        "lichiang-city", {"generate city --objects 150 --landmark-fraction 0.2 --seed 6 -o {dir}/city.cwscene",
+                          "build {dir}/city.cwscene -o {dir}/city.cww", "build {dir}/city.cwscene -o {dir}/bare.cww",
+                          "pvs {dir}/city.cww --engine conservative --cells grid:25",
+                          "path {dir}/city.cww --frames 60 --seed 4 -o {dir}/city.path",
+                          "path {dir}/city.cww --kind fast --frames 400 --seed 4 -o {dir}/far.path"});
+    world_ = inputs_->file("city.cww");
+    path_ = inputs_->file("city.path");
+    far_path_ = inputs_->file("far.path");
+    bare_ = inputs_->file("bare.cww");
   }
-  static void TearDownTestSuite() { delete dir_; }
-  static inline test::TempDir* dir_ = nullptr;
+  static void TearDownTestSuite() { delete inputs_; }
+  static inline test::SharedInputs* inputs_ = nullptr;
   static inline std::string world_, bare_, path_;  // bare_: the same world without sets
   static inline std::string far_path_;             // through several cells
+  const test::TempDir out_;                        // this test's outputs
 };
 
 // Without sets the strategy names the command; with them, every visible object is drawn, in
 // each of the seed's cases, and the union of the neighbours' sets holds the own set.
 TEST_F(LiChiangSystem, DrawsEveryVisibleObjectInEachCase) {
-  test::CommandResult r = test::run_cellwalk("walk " + bare_ + " --path " + path_ + " --strategy lichiang -o " + dir_->file("w0"));
+  test::CommandResult r = test::run_cellwalk("walk " + bare_ + " --path " + path_ + " --strategy lichiang -o " + out_.file("w0"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("cellwalk pvs"), std::string::npos) << r.output;
   // Sets over a k-d tree: the configurations need a grid, and the message says so.
-  ASSERT_EQ(test::run_cellwalk("pvs " + bare_ + " --engine conservative --cells kd:25").exit_code, 0);
-  r = test::run_cellwalk("walk " + bare_ + " --path " + path_ + " --strategy lichiang -o " + dir_->file("w0"));
+  const std::string kd = out_.file("kd.cww");
+  std::filesystem::copy_file(bare_, kd);
+  ASSERT_EQ(test::run_cellwalk("pvs " + kd + " --engine conservative --cells kd:25").exit_code, 0);
+  r = test::run_cellwalk("walk " + kd + " --path " + path_ + " --strategy lichiang -o " + out_.file("w0"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--cells grid:"), std::string::npos) << r.output;
   for (const std::string strategy : {"lichiang", "lichiang:neighbours=0", "lichiang:cache=none,prefetch=none",
                                      "lichiang:cache=lru,prefetch=one-step", "lichiang:sectors=1,neighbours=0"}) {
     SCOPED_TRACE(strategy);
     r = test::run_cellwalk("compare " + world_ + " --path " + path_ + " --strategy " + strategy +
-                           " --every 3 --width 128 --height 96 --json -o " + dir_->file("cmp"));
+                           " --every 3 --width 128 --height 96 --json -o " + out_.file("cmp"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json j = summary_of(r);
     ASSERT_TRUE(j.is_object()) << r.output;
@@ -305,7 +304,7 @@ TEST_F(LiChiangSystem, TheFourCasesHoldTheBudget) {
     SCOPED_TRACE(strategy);
     const test::CommandResult r = test::run_cellwalk("walk " + world_ + " --path " + path_ + " --strategy " + strategy +
                                                      " --budget 20 --gpu-budget 1 --width 128 --height 96 --json -o " +
-                                                     dir_->file("walk"));
+                                                     out_.file("walk"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const nlohmann::json j = summary_of(r);
     ASSERT_TRUE(j.is_object()) << r.output;

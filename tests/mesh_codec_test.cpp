@@ -19,7 +19,7 @@ namespace cellwalk {
 namespace {
 
 // The bunny as the store holds it: cache- and fetch-ordered (level 0 of its chain).
-const Mesh& bunny() {
+const Mesh& stored_bunny() {
   static const Mesh mesh = [] {
     LodParams one_level;
     one_level.min_triangles = size_t(1) << 30;
@@ -74,15 +74,15 @@ TEST(MeshCodec, BunnyRoundTrip) {
   for (int bits : {16, 12, 8}) {
     for (bool zstd : {false, true}) {
       SCOPED_TRACE("bits " + std::to_string(bits) + (zstd ? " zstd" : ""));
-      expect_round_trip(bunny(), {bits, 8, zstd});
+      expect_round_trip(stored_bunny(), {bits, 8, zstd});
     }
   }
-  expect_round_trip(bunny(), {16, 16, false});
+  expect_round_trip(stored_bunny(), {16, 16, false});
 }
 
 // Bytes per triangle against raw floats (12 B/vertex position + 12 normal + 12 B/triangle).
 TEST(MeshCodec, BunnyBytesPerTriangle) {
-  const Mesh& m = bunny();
+  const Mesh& m = stored_bunny();
   const double raw = 24.0 * m.vertex_count() + 12.0 * m.triangle_count();
   const double plain = encode_mesh(m, {}).size(), zstd = encode_mesh(m, {16, 8, true}).size();
   const double n = double(m.triangle_count());

@@ -195,29 +195,25 @@ TEST(ObjectDatabase, FlippedBytesNeverGiveOtherBytes) {
 class ObjectDatabaseCity : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new test::TempDir;
-    world_ = dir_->file("city.cww");
-    path_ = dir_->file("city.path");
+    inputs_ = new test::SharedInputs(
+        "database-city", {"generate city --objects 150 --landmark-fraction 0.2 --seed 6 -o {dir}/city.cwscene",
+                          "build {dir}/city.cwscene -o {dir}/city.cww",
+                          "pvs {dir}/city.cww --engine conservative --cells grid:25",
+                          "path {dir}/city.cww --frames 40 --seed 4 -o {dir}/city.path", "db {dir}/city.cww"});
+    world_ = inputs_->file("city.cww");
+    path_ = inputs_->file("city.path");
     db_ = world_ + ".sqlite";
-    for (const std::string& command :
-         {"generate city --objects 150 --landmark-fraction 0.2 --seed 6 -o " +
-              dir_->file("city.cwscene"),
-          "build " + dir_->file("city.cwscene") + " -o " + world_,
-          "pvs " + world_ + " --engine conservative --cells grid:25",
-          "path " + world_ + " --frames 40 --seed 4 -o " + path_, "db " + world_}) {
-      const test::CommandResult r = test::run_cellwalk(command);
-      ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
-    }
   }
-  static void TearDownTestSuite() { delete dir_; }
+  static void TearDownTestSuite() { delete inputs_; }
   static nlohmann::json json_of(const test::CommandResult& r) {
     const size_t start = r.output.find('{');
     return start == std::string::npos
                ? nlohmann::json()
                : nlohmann::json::parse(r.output.substr(start), nullptr, false);
   }
-  static inline test::TempDir* dir_ = nullptr;
+  static inline test::SharedInputs* inputs_ = nullptr;
   static inline std::string world_, path_, db_;
+  const test::TempDir out_;  // this test's outputs
 };
 
 // SQLite's heap, measured by SQLite, never passes what the store reserves for the database
@@ -291,7 +287,7 @@ TEST_F(ObjectDatabaseCity, WalkAndCompareOverTheDatabase) {
       const test::CommandResult r =
           test::run_cellwalk("compare " + world_ + " --path " + path_ + " --strategy " + strategy +
                              (with_db ? " --objects-db " + db_ : std::string()) +
-                             " --every 4 --width 128 --height 96 --json -o " + dir_->file("cmp"));
+                             " --every 4 --width 128 --height 96 --json -o " + out_.file("cmp"));
       ASSERT_EQ(r.exit_code, 0) << r.output;
       runs[with_db] = json_of(r);
       ASSERT_TRUE(runs[with_db].is_object()) << r.output;
@@ -305,7 +301,7 @@ TEST_F(ObjectDatabaseCity, WalkAndCompareOverTheDatabase) {
   const test::CommandResult r = test::run_cellwalk(
       "walk " + world_ + " --path " + path_ +
       " --strategy lichiang:cache=lru,prefetch=none --objects-db " + db_ +
-      " --budget 24 --gpu-budget 1 --width 128 --height 96 --json -o " + dir_->file("walk"));
+      " --budget 24 --gpu-budget 1 --width 128 --height 96 --json -o " + out_.file("walk"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = json_of(r);
   ASSERT_TRUE(j.is_object()) << r.output;
@@ -333,12 +329,12 @@ TEST_F(ObjectDatabaseCity, DbCommand) {
   EXPECT_NE(r.exit_code, 0);
   EXPECT_TRUE(std::filesystem::exists(world_));
   EXPECT_NO_THROW(World{world_});
-  r = test::run_cellwalk("db " + world_ + " --json -o " + dir_->file("copy.sqlite"));
+  r = test::run_cellwalk("db " + world_ + " --json -o " + out_.file("copy.sqlite"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const nlohmann::json j = json_of(r);
   ASSERT_TRUE(j.is_object()) << r.output;
   EXPECT_EQ(j["objects"].get<uint64_t>(), 150u);
-  EXPECT_EQ(j["file_bytes"].get<uint64_t>(), std::filesystem::file_size(dir_->file("copy.sqlite")));
+  EXPECT_EQ(j["file_bytes"].get<uint64_t>(), std::filesystem::file_size(out_.file("copy.sqlite")));
   r = test::run_cellwalk("db --help");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.output.find("--output"), std::string::npos);

@@ -30,25 +30,24 @@ constexpr float kBox = 120.0f;
 class StratifiedSystem : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new test::TempDir;
-    const std::string scene = dir_->file("city.cwscene");
-    world_file_ = dir_->file("city.cww");
-    for (const std::string& args :
-         {"generate stratified-city --blocks-x 4 --blocks-z 4 --seed 5 -o " + scene, "build " + scene + " -o " + world_file_,
-          "stratify build " + world_file_ + " --alpha 10 --box 120 --resolution 64"}) {
-      const test::CommandResult r = test::run_cellwalk(args);
-      ASSERT_EQ(r.exit_code, 0) << args << ": " << r.output;
-    }
+    inputs_ = new test::SharedInputs(
+        "stratified-city", {"generate stratified-city --blocks-x 4 --blocks-z 4 --seed 5 -o {dir}/city.cwscene",
+                            "build {dir}/city.cwscene -o {dir}/city.cww",
+                            "stratify build {dir}/city.cww --alpha 10 --box 120 --resolution 64",
+                            "path {dir}/city.cww -o {dir}/fast.path --frames 120 --kind fast --seed 3"});
+    world_file_ = inputs_->file("city.cww");
     world_ = new World(world_file_);
     context_ = GlContext::headless().release();
   }
   static void TearDownTestSuite() {
     delete context_;
     delete world_;
-    delete dir_;
+    delete inputs_;
   }
+  // A fast path through the city (120 frames).
+  static CameraPath city_path() { return read_path(inputs_->file("fast.path")); }
 
-  static inline test::TempDir* dir_ = nullptr;
+  static inline test::SharedInputs* inputs_ = nullptr;
   static inline std::string world_file_;
   static inline World* world_ = nullptr;
   static inline GlContext* context_ = nullptr;
@@ -181,18 +180,11 @@ std::vector<FrameStats> frames_of(const std::string& strategy, const World& worl
   return out;
 }
 
-CameraPath city_path(const std::string& world_file, const test::TempDir& dir) {
-  const std::string path = dir.file("p.path");
-  const test::CommandResult r = test::run_cellwalk("path " + world_file + " -o " + path + " --frames 120 --kind fast --seed 3");
-  EXPECT_EQ(r.exit_code, 0) << r.output;
-  return read_path(path);
-}
-
 TEST_F(StratifiedSystem, ShowBruteDrawsWhatBruteDrawsAndFullDrawsFewerTriangles) {
   RenderSettings settings;
   settings.width = settings.height = 128;
   Renderer renderer(settings);
-  const CameraPath path = city_path(world_file_, *dir_);
+  const CameraPath path = city_path();
   std::vector<Image> brute_images, show_brute_images;
   const auto brute = frames_of("brute", *world_, path, renderer, &brute_images);
   const auto show_brute = frames_of("stratified:show=brute", *world_, path, renderer, &show_brute_images);
@@ -212,7 +204,7 @@ TEST_F(StratifiedSystem, BudgetHoldsTheFacesOrTheRunIsRefused) {
   RenderSettings settings;
   settings.width = settings.height = 64;
   Renderer renderer(settings);
-  const CameraPath path = city_path(world_file_, *dir_);
+  const CameraPath path = city_path();
   const uint64_t budget = 8ull << 20;
   StrategyOptions options;
   options.memory_budget_bytes = budget;
@@ -239,7 +231,7 @@ TEST_F(StratifiedSystem, PrefetchHasTheNextCellReadyAtTheCrossing) {
   RenderSettings settings;
   settings.width = settings.height = 64;
   Renderer renderer(settings);
-  const CameraPath path = city_path(world_file_, *dir_);
+  const CameraPath path = city_path();
   StratifiedCounters counted[2];
   std::vector<Image> images[2];
   for (const int prefetch : {0, 1}) {
@@ -269,7 +261,7 @@ TEST_F(StratifiedSystem, ABudgetTooSmallForACellIsAnErrorNotACrash) {
   RenderSettings settings;
   settings.width = settings.height = 32;
   Renderer renderer(settings);
-  const CameraPath path = city_path(world_file_, *dir_);
+  const CameraPath path = city_path();
   int refused = 0, ran = 0;
   for (uint64_t budget = 128 << 10; budget <= (3u << 20); budget += 64 << 10)
     for (const char* name : {"stratified", "stratified:prefetch=0"}) {

@@ -1,7 +1,10 @@
 #include "test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/file.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 
 #include <array>
@@ -86,6 +89,75 @@ CommandResult run_cellwalk(const std::string& args) {
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   result.max_rss_bytes = uint64_t(usage.ru_maxrss) * 1024;  // ru_maxrss is in KiB on Linux
   return result;
+}
+
+namespace {
+
+uint64_t fnv1a(const std::string& text) {
+  uint64_t h = 14695981039346656037ull;
+  for (const char c : text) h = (h ^ uint8_t(c)) * 1099511628211ull;
+  return h;
+}
+
+// What a rebuilt binary changes: its path, size and modification time.
+std::string binary_identity(const std::string& binary) {
+  struct stat st {};
+  if (stat(binary.c_str(), &st) != 0) return binary;
+  return binary + " " + std::to_string(st.st_size) + " " + std::to_string(st.st_mtim.tv_sec) + "." +
+         std::to_string(st.st_mtim.tv_nsec);
+}
+
+std::string with_dir(std::string command, const std::string& dir) {
+  for (size_t at = command.find("{dir}"); at != std::string::npos; at = command.find("{dir}", at + dir.size()))
+    command.replace(at, 5, dir);
+  return command;
+}
+
+// Removes the folders an earlier binary made for `name`: they would only fill the disk.
+void remove_stale(const std::filesystem::path& root, const std::string& name, const std::filesystem::path& keep) {
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(root, ec)) {
+    const std::string leaf = entry.path().filename().string();
+    if (entry.path() != keep && leaf.size() == name.size() + 17 && leaf.rfind(name + "-", 0) == 0 && entry.is_directory(ec))
+      std::filesystem::remove_all(entry.path(), ec);
+  }
+}
+
+}  // namespace
+
+SharedInputs::SharedInputs(const std::string& name, const std::vector<std::string>& commands) {
+  std::string key = binary_identity(cellwalk_binary());
+  for (const std::string& c : commands) key.append("\n").append(c);
+  char hash[17];
+  std::snprintf(hash, sizeof hash, "%016llx", static_cast<unsigned long long>(fnv1a(key)));
+  const std::filesystem::path root = std::filesystem::read_symlink("/proc/self/exe").parent_path() / "test-inputs";
+  std::filesystem::create_directories(root);
+  path_ = root / (name + "-" + hash);
+  const int lock = open((path_.string() + ".lock").c_str(), O_CREAT | O_RDWR | O_CLOEXEC, 0644);
+  if (lock < 0 || flock(lock, LOCK_EX) != 0) {
+    ADD_FAILURE() << "cannot lock " << path_ << ".lock";
+    if (lock >= 0) close(lock);
+    return;
+  }
+  complete_ = std::filesystem::exists(path_ / ".complete");
+  if (!complete_) {
+    remove_stale(root, name, path_);
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+    complete_ = true;
+    for (const std::string& c : commands) {
+      const std::string command = with_dir(c, path_.string());
+      const CommandResult r = run_cellwalk(command);
+      if (r.exit_code != 0) {
+        ADD_FAILURE() << "making the shared inputs " << name << ": cellwalk " << command << "\n" << r.output;
+        complete_ = false;
+        break;
+      }
+    }
+    if (complete_) std::ofstream(path_ / ".complete") << key;
+  }
+  flock(lock, LOCK_UN);
+  close(lock);
 }
 
 }  // namespace cellwalk::test

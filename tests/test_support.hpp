@@ -58,6 +58,25 @@ std::string cellwalk_binary();
 // Runs the cellwalk binary with `args` (a shell-quoted string) and captures its output.
 CommandResult run_cellwalk(const std::string& args);
 
+// Inputs the tests of a suite read and never write, made once for all of them: ctest runs each
+// test in a process of its own, so a suite's SetUpTestSuite would otherwise make them again for
+// every test. `commands` are cellwalk arguments in which "{dir}" stands for the folder. The
+// folder lies beside the test binary, named for `name` and a hash of the commands and of the
+// cellwalk binary (path, size, time), so a rebuilt binary makes them anew.
+// Process-safe: made under an exclusive lock, and marked complete only after the last command
+// succeeded; a failing command fails the calling test and leaves the folder to be made again.
+// A test that changes an input works on a copy (in a TempDir of its own).
+class SharedInputs {
+ public:
+  SharedInputs(const std::string& name, const std::vector<std::string>& commands);
+  std::string file(const std::string& name) const { return (path_ / name).string(); }
+  bool complete() const { return complete_; }
+
+ private:
+  std::filesystem::path path_;
+  bool complete_ = false;
+};
+
 }  // namespace cellwalk::test
 
 #include "cellwalk/scene/mesh.hpp"

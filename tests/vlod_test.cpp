@@ -38,19 +38,15 @@ nlohmann::json summary_of(const test::CommandResult& r) {
 class VlodCity : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    dir_ = new test::TempDir();
-    world_ = dir_->file("city.cww");
-    for (const std::string& command :
-         {"generate city --objects 60 --seed 5 -o " + dir_->file("city.cwscene"),
-          "build " + dir_->file("city.cwscene") + " -o " + world_})
-      ASSERT_EQ(test::run_cellwalk(command).exit_code, 0) << command;
+    inputs_ = new test::SharedInputs(
+        "vlod-city", {"generate city --objects 60 --seed 5 -o {dir}/city.cwscene", "build {dir}/city.cwscene -o {dir}/city.cww"});
+    world_ = inputs_->file("city.cww");
   }
-  static void TearDownTestSuite() { delete dir_; }
-  static test::TempDir* dir_;
-  static std::string world_;
+  static void TearDownTestSuite() { delete inputs_; }
+  static inline test::SharedInputs* inputs_ = nullptr;
+  static inline std::string world_;
+  const test::TempDir out_;  // this test's outputs
 };
-test::TempDir* VlodCity::dir_ = nullptr;
-std::string VlodCity::world_;
 
 // Against the oracle of the definition: the level chosen meets the bound over the cell, the
 // next coarser one does not, and an object the cell touches is drawn at level 0.
@@ -158,22 +154,24 @@ TEST(VlodVisibility, MarginsOnlyAddToTheSet) {
 // End to end: `pvs --engine vlod`, then compare against ground truth: no visible object missed,
 // and the vLOD draws fewer triangles than brute on the same path.
 TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
-  const std::string path = dir_->file("p.path");
-  auto r = test::run_cellwalk("path " + world_ + " --frames 24 --seed 3 -o " + path);
+  // pvs writes its sets into the world: a copy of the suite's.
+  const std::string world = out_.file("city.cww"), path = out_.file("p.path");
+  std::filesystem::copy_file(world_, world);
+  auto r = test::run_cellwalk("path " + world + " --frames 24 --seed 3 -o " + path);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   // Without vLOD sets the strategy says what to run.
-  r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy vlod --width 96 --height 72 -o " + dir_->file("w0"));
+  r = test::run_cellwalk("walk " + world + " --path " + path + " --strategy vlod --width 96 --height 72 -o " + out_.file("w0"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--engine vlod"), std::string::npos) << r.output;
   // The world keeps another run's DoVs beside its vLODs: hdov-vsc walks it after vlod's pvs.
-  r = test::run_cellwalk("pvs " + world_ + " --engine dov --cells grid:30 --dov-resolution 16 --points 4 --rays 256");
+  r = test::run_cellwalk("pvs " + world + " --engine dov --cells grid:30 --dov-resolution 16 --points 4 --rays 256");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:40 --refine 1 --lod-height 72 --lod-aspect 1.3333334");
+  r = test::run_cellwalk("pvs " + world + " --engine vlod --cells grid:40 --refine 1 --lod-height 72 --lod-aspect 1.3333334");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy hdov-vsc --width 96 --height 72 -o " + dir_->file("w-dov"));
+  r = test::run_cellwalk("walk " + world + " --path " + path + " --strategy hdov-vsc --width 96 --height 72 -o " + out_.file("w-dov"));
   EXPECT_EQ(r.exit_code, 0) << r.output;
-  r = test::run_cellwalk("compare " + world_ + " --path " + path + " --strategy vlod --every 2 --width 96 --height 72 --json -o " +
-                         dir_->file("cmp"));
+  r = test::run_cellwalk("compare " + world + " --path " + path + " --strategy vlod --every 2 --width 96 --height 72 --json -o " +
+                         out_.file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const auto fidelity = summary_of(r);
   ASSERT_TRUE(fidelity.is_object()) << r.output;
@@ -182,8 +180,8 @@ TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
   uint64_t triangles[2] = {0, 0};
   int k = 0;
   for (const std::string strategy : {"brute", "vlod"}) {
-    r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy " + strategy +
-                           " --budget 48 --width 96 --height 72 --json -o " + dir_->file("walk-" + strategy));
+    r = test::run_cellwalk("walk " + world + " --path " + path + " --strategy " + strategy +
+                           " --budget 48 --width 96 --height 72 --json -o " + out_.file("walk-" + strategy));
     ASSERT_EQ(r.exit_code, 0) << r.output;
     const auto j = summary_of(r);
     ASSERT_TRUE(j.is_object()) << r.output;
@@ -192,7 +190,7 @@ TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
   }
   EXPECT_LT(triangles[1], triangles[0]);
   // An image taller than the levels were chosen for would break their bound: refused.
-  r = test::run_cellwalk("walk " + world_ + " --path " + path + " --strategy vlod --width 640 --height 480 -o " + dir_->file("w1"));
+  r = test::run_cellwalk("walk " + world + " --path " + path + " --strategy vlod --width 640 --height 480 -o " + out_.file("w1"));
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("--lod-height"), std::string::npos) << r.output;
 }
@@ -244,7 +242,7 @@ std::map<CellId, std::vector<visibility::PieceId>> vlods_of(const World& world, 
 // §2.3: every stored face Δ takes one cell's vLOD exactly to its neighbour's, in both
 // directions, and every key cell's stored vLOD is its own; every cell is near a key cell.
 TEST_F(VlodCity, FaceDeltasAndKeyCellsRebuildEveryVlod) {
-  const std::string world_file = dir_->file("deltas.cww");
+  const std::string world_file = out_.file("deltas.cww");
   auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells octree:40:30000:2 --refine 1 --lod-height 72 -o " + world_file);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("vlod section"), std::string::npos) << r.output;
@@ -279,7 +277,7 @@ TEST_F(VlodCity, FaceDeltasAndKeyCellsRebuildEveryVlod) {
 // The run time's vLOD is the cell's whatever the route: single crossings, several cells in
 // one frame, and teleports, checked against the oracle with culling off (select draws the vLOD).
 TEST_F(VlodCity, TheRunTimeVlodIsTheCellsOwnAfterAnyMove) {
-  const std::string world_file = dir_->file("moves.cww");
+  const std::string world_file = out_.file("moves.cww");
   auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:30 --refine 1 --lod-height 72 -o " + world_file);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   const World world(world_file);
@@ -314,12 +312,12 @@ TEST_F(VlodCity, TheRunTimeVlodIsTheCellsOwnAfterAnyMove) {
 // Precompute at scale: two shards merged give the section one run gives, byte for byte.
 TEST_F(VlodCity, ShardsMergeIntoTheSectionOfOneRun) {
   const std::string spec = " --engine vlod --cells grid:30 --refine 1 --lod-height 72";
-  const std::string whole = dir_->file("whole.cww"), merged = dir_->file("merged.cww");
+  const std::string whole = out_.file("whole.cww"), merged = out_.file("merged.cww");
   auto r = test::run_cellwalk("pvs " + world_ + spec + " -o " + whole);
   ASSERT_EQ(r.exit_code, 0) << r.output;
   std::string parts;
   for (const char* shard : {"0/2", "1/2"}) {
-    const std::string part = dir_->file(std::string("part") + shard[0]);
+    const std::string part = out_.file(std::string("part") + shard[0]);
     r = test::run_cellwalk("pvs " + world_ + spec + " --shard " + shard + " -o " + part);
     ASSERT_EQ(r.exit_code, 0) << r.output;
     parts += " " + part;
@@ -339,7 +337,7 @@ TEST_F(VlodCity, DiskOrderMovesTheLevelsNotTheirBytes) {
   const World original(world_);
   std::map<std::string, uint64_t> runs;
   for (const std::string layout : {"keep", "morton", "tsp"}) {
-    const std::string file = dir_->file("layout-" + layout + ".cww");
+    const std::string file = out_.file("layout-" + layout + ".cww");
     auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:30 --refine 1 --lod-height 72 --json --disk-order " +
                                 layout + " -o " + file);
     ASSERT_EQ(r.exit_code, 0) << r.output;
@@ -380,12 +378,12 @@ TEST_F(VlodCity, DiskOrderMovesTheLevelsNotTheirBytes) {
   EXPECT_LT(runs["tsp"], runs["keep"]);
   EXPECT_LE(runs["tsp"], runs["morton"]);
   // A k-d scene tree (conv, hdov) built on the world still belongs to it laid out anew.
-  const std::string tree = dir_->file("layout.scenetree");
+  const std::string tree = out_.file("layout.scenetree");
   open_scene_tree(original, SceneTreeParams{}, tree);
-  const World laid_out(dir_->file("layout-tsp.cww"));
+  const World laid_out(out_.file("layout-tsp.cww"));
   EXPECT_NO_THROW(SceneTree(laid_out, tree));
   // A disk order is no option of another engine.
-  EXPECT_NE(test::run_cellwalk("pvs " + world_ + " --engine sampling --disk-order tsp -o " + dir_->file("x.cww")).exit_code, 0);
+  EXPECT_NE(test::run_cellwalk("pvs " + world_ + " --engine sampling --disk-order tsp -o " + out_.file("x.cww")).exit_code, 0);
 }
 
 }  // namespace
