@@ -8,6 +8,7 @@
 #include <set>
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/core/error.hpp"
 #include "cellwalk/core/random.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_cache.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_prefetch.hpp"

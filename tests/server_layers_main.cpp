@@ -1,5 +1,5 @@
 // A program linked only with the layers a streaming server needs (core, scene, lod, store,
-// index, visibility): no OpenGL, no Embree. The build fails to link it if any of those layers
+// index, visibility, net, and the PVS streaming server): no OpenGL, no Embree. The build fails to link it if any of those layers
 // comes to need the renderer or the precompute; tests/CMakeLists.txt also checks its dynamic
 // libraries. It reads what a server would serve: a world's objects and, if stored, its sets.
 #include <cstdio>
@@ -7,6 +7,7 @@
 
 #include "cellwalk/index/rtree.hpp"
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/pvs_stream/pvs_server.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 
 int main(int argc, char** argv) {
@@ -27,6 +28,10 @@ int main(int argc, char** argv) {
       for (CellId c = 0; c < pvs.partition().cell_count(); ++c)
         if (auto set = pvs.set(c)) ids += set->objects.size();
       std::printf("visible sets: %zu cells, %llu ids\n", pvs.partition().cell_count(), (unsigned long long)ids);
+      if (pvs.partition().kind() == "grid") {
+        const pvs_stream::PvsServer server(world, {});
+        std::printf("pvs server: listening on port %u\n", unsigned(server.port()));
+      }
     }
     if (world.file().has_section(kRTreeSection)) std::printf("r-tree: present\n");
     return 0;
