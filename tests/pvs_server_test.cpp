@@ -11,10 +11,12 @@
 #include <thread>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/core/camera_path.hpp"
 #include "cellwalk/core/random.hpp"
 #include "cellwalk/net/frame.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
+#include "cellwalk/systems/pvs_stream_client/pvs_stream_strategy.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 #include "test_support.hpp"
 
@@ -30,7 +32,8 @@ class PvsServerTest : public ::testing::Test {
   static void SetUpTestSuite() {
     inputs_ = new test::SharedInputs(
         "pvs-server-city", {"generate city --objects 40 --seed 3 -o {dir}/city.cwscene", "build {dir}/city.cwscene -o {dir}/city.cww",
-                            "pvs {dir}/city.cww --engine conservative --cells grid:30"});
+                            "pvs {dir}/city.cww --engine conservative --cells grid:30",
+                            "path {dir}/city.cww --kind fast --frames 600 -o {dir}/fast.path"});
   }
   static void TearDownTestSuite() { delete inputs_; }
 
@@ -199,6 +202,179 @@ TEST_F(PvsServerTest, ServeCommand) {
   const test::CommandResult bare = test::run_cellwalk("serve " + inputs_->file("city.cwscene") + " --seconds 0.5");
   EXPECT_NE(bare.exit_code, 0);
   EXPECT_EQ(std::count(bare.output.begin(), bare.output.end(), '\n'), 1) << bare.output;
+}
+
+// ---- The client as a strategy ------------------------------------------------------------
+
+// One frame the streaming client chose.
+struct StreamedFrame {
+  Camera camera;
+  std::optional<uint32_t> cell;
+  std::set<uint32_t> drawn;
+};
+
+class PvsStreamClientTest : public PvsServerTest {
+ protected:
+  void SetUp() override { world_ = std::make_unique<World>(inputs_->file("city.cww")); }
+
+  std::unique_ptr<PvsStreamStrategy> client(const std::string& name, uint64_t budget = 0) {
+    StrategyOptions options;
+    options.memory_budget_bytes = budget;
+    return std::make_unique<PvsStreamStrategy>(*world_, parse_pvs_stream_strategy_name(name), options);
+  }
+
+  // Every frame of the fast path (or its first `frames`): selects, then fetches every item's
+  // mesh as the renderer would, checking it is the level the item names.
+  std::vector<StreamedFrame> stream(PvsStreamStrategy& s, size_t frames = SIZE_MAX) {
+    const CameraPath path = read_path(inputs_->file("fast.path"));
+    std::vector<StreamedFrame> out;
+    Camera camera;
+    for (size_t i = 0; i < std::min(frames, path.frames.size()); ++i) {
+      apply(path.frames[i], camera);
+      std::vector<DrawItem> items;
+      FrameStats stats;
+      stats.time = path.frames[i].time;
+      s.select(camera, items, stats);
+      StreamedFrame f{camera, s.cell_id(camera), {}};
+      for (const DrawItem& item : items) {
+        const Mesh* mesh = s.mesh(item, stats);
+        EXPECT_NE(mesh, nullptr) << "object " << item.id;
+        if (mesh) {
+          EXPECT_EQ(mesh->triangle_count(), world_->lod(item.id, item.lod).triangles) << "object " << item.id;
+        }
+        f.drawn.insert(item.id);
+      }
+      out.push_back(std::move(f));
+    }
+    return out;
+  }
+
+  // The oracle: the stored set of the frame's cell, culled to its frustum.
+  std::set<uint32_t> expected(const StreamedFrame& f) const {
+    const visibility::StoredPvs pvs(*world_);
+    std::set<uint32_t> out;
+    const auto set = pvs.set(*f.cell);
+    if (!set) return out;
+    const Frustum frustum(f.camera);
+    for (uint32_t id : set->objects)
+      if (frustum.intersects(world_->object(id).bounds)) out.insert(id);
+    return out;
+  }
+
+  // Frames that stand in a view cell and drew exactly its culled stored set.
+  size_t exact_frames(const std::vector<StreamedFrame>& frames) const {
+    size_t n = 0;
+    for (const StreamedFrame& f : frames) {
+      if (!f.cell) continue;
+      const std::set<uint32_t> e = expected(f);
+      EXPECT_EQ(f.drawn, e) << "cell " << *f.cell;
+      n += f.drawn == e;
+    }
+    return n;
+  }
+};
+
+// With every reply in time, each frame draws its cell's stored set, culled, from geometry that
+// came over the socket; every prefetcher, the strategy's own server and a running one.
+TEST_F(PvsStreamClientTest, EachFrameDrawsItsCellsStoredSet) {
+  start();
+  for (const std::string& name : std::vector<std::string>{"pvs-stream:prefetch=snp,pace=0", "pvs-stream:prefetch=pbnp,pace=0",
+                                 "pvs-stream:prefetch=speed,pace=0",
+                                 "pvs-stream:pace=0,server=127.0.0.1:" + std::to_string(server_->port())}) {
+    SCOPED_TRACE(name);
+    auto s = client(name);
+    const std::vector<StreamedFrame> frames = stream(*s);
+    EXPECT_GT(exact_frames(frames), frames.size() / 2);
+    const PvsStreamCounters c = s->counters();
+    EXPECT_EQ(c.late_frames, 0u);
+    EXPECT_GE(c.cell_crossings, 3u);
+    EXPECT_GE(c.transactions, 2u);
+    EXPECT_GT(c.objects_received, 0u);
+    EXPECT_GT(c.bytes_received, c.objects_received * 12);
+    EXPECT_LE(s->resident_bytes(), s->peak_resident_bytes());
+  }
+  // The running server sent what that client received, and saw it close.
+  EXPECT_GE(server_->stats().fetches, 2u);
+}
+
+// Over a slow link a frame that crosses into a cell whose row has not come waits for it (a
+// stall) and still draws exactly that cell's set; told not to wait, it draws the last row it had
+// and counts the frame late.
+TEST_F(PvsStreamClientTest, ALateRowStallsTheFrameOrIsCountedLate) {
+  auto waits = client("pvs-stream:prefetch=snp,pace=0,latency_ms=120,wait_ms=20000");
+  const std::vector<StreamedFrame> frames = stream(*waits);
+  EXPECT_GT(exact_frames(frames), frames.size() / 2);
+  EXPECT_GT(waits->counters().stall_frames, 0u);
+  EXPECT_EQ(waits->counters().late_frames, 0u);
+  EXPECT_GE(waits->counters().startup_ms, 240.0);  // a round trip at least
+
+  auto hurries = client("pvs-stream:prefetch=snp,pace=0,latency_ms=120,wait_ms=0");
+  stream(*hurries);
+  EXPECT_GT(hurries->counters().late_frames, 0u);
+  EXPECT_EQ(hurries->counters().late_frames, hurries->counters().stall_frames);
+}
+
+// A memory budget bounds the client's store: rows other than the current cell's go first, the
+// frames still draw their cells' sets; a budget below one cell's objects stops with what to do.
+TEST_F(PvsStreamClientTest, TheBudgetBoundsTheStore) {
+  auto unbounded = client("pvs-stream:pace=0");
+  stream(*unbounded);
+  const uint64_t peak = unbounded->peak_resident_bytes();
+  // Between the largest cell's own objects (decoded, with its row) and the unbounded peak.
+  const visibility::StoredPvs pvs(*world_);
+  uint64_t largest = 0;
+  for (CellId c = 0; c < pvs.partition().cell_count(); ++c) {
+    const auto set = pvs.partition().cell(c).computed() ? pvs.set(c) : std::nullopt;
+    if (!set) continue;
+    uint64_t bytes = set->objects.size() * sizeof(uint32_t);
+    for (uint32_t id : set->objects) bytes += world_->decode_level(id, 0, world_->read_level(id, 0)).byte_size();
+    largest = std::max(largest, bytes);
+  }
+  ASSERT_LT(largest, peak) << "one cell sees the whole store: no budget between them to test";
+  const uint64_t budget = (largest + peak) / 2;
+  auto bounded = client("pvs-stream:pace=0", budget);
+  const std::vector<StreamedFrame> frames = stream(*bounded);
+  EXPECT_GT(exact_frames(frames), frames.size() / 2);
+  EXPECT_LE(bounded->peak_resident_bytes(), budget);
+  EXPECT_GE(bounded->counters().cache_swaps, unbounded->counters().cache_swaps);
+
+  auto starved = client("pvs-stream:pace=0", 1024);
+  try {
+    stream(*starved);
+    FAIL() << "a 1 KiB budget held a cell's objects";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("raise --budget"), std::string::npos) << e.what();
+  }
+}
+
+// Names the strategy refuses, each with what to write instead.
+TEST(PvsStreamStrategyName, BadSettingsAreRefused) {
+  EXPECT_EQ(parse_pvs_stream_strategy_name("pvs-stream").prefetch, PvsStreamConfig::Prefetch::kPbnp);
+  EXPECT_EQ(parse_pvs_stream_strategy_name("pvs-stream:prefetch=speed").band, 0.05);
+  const PvsStreamConfig c = parse_pvs_stream_strategy_name("pvs-stream:server=localhost:7000,entries=12");
+  EXPECT_EQ(c.host, "localhost");
+  EXPECT_EQ(c.port, 7000);
+  EXPECT_EQ(c.entries, 12);
+  for (const std::string bad : {"pvs-stream:prefetch=psychic", "pvs-stream:prefetch=snp,entries=8", "pvs-stream:entries=3",
+                                "pvs-stream:prefetch=snp,band=0.2", "pvs-stream:band=0.5", "pvs-stream:server=7000",
+                                "pvs-stream:server=host:70000", "pvs-stream:server=h:1,latency_ms=5", "pvs-stream:pace=2",
+                                "pvs-stream:colour=red"}) {
+    try {
+      parse_pvs_stream_strategy_name(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
+// The command line: walk streams the world from the strategy's own server.
+TEST_F(PvsStreamClientTest, WalkStreamsTheWorld) {
+  const test::TempDir out;
+  const test::CommandResult r = test::run_cellwalk("walk " + inputs_->file("city.cww") + " --path " + inputs_->file("fast.path") +
+                                                   " --strategy pvs-stream:latency_ms=5,pace=0 -o " + out.file("walk") + " --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("pvs-stream"), std::string::npos) << r.output;
 }
 
 }  // namespace

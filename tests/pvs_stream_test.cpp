@@ -268,7 +268,22 @@ TEST(PvsStreamBench, WritesItsReport) {
   p.seeds = {2};
   p.bands = {0.2, 0.4};
   p.out_dir = dir.path().string();
+  // Over sockets, small: one path, one link, the two prefetchers.
+  p.net.objects = 30;
+  p.net.frames = 90;
+  p.net.kinds = {"fast"};
+  p.net.latencies = {20};
+  p.net.bandwidths = {100};
+  p.net.prefetchers = {"snp", "pbnp"};
+  p.net.clients = 4;
   const nlohmann::ordered_json j = run_pvs_stream_bench(p);
+  ASSERT_EQ(j["sockets"].size(), 2u);
+  for (const auto& run : j["sockets"]) {
+    EXPECT_EQ(run["frames"].get<uint64_t>(), 90u);
+    EXPECT_GT(run["transactions"].get<uint64_t>(), 0u);
+    EXPECT_GT(run["bytes_received"].get<uint64_t>(), 0u);
+    EXPECT_GE(run["startup_ms"].get<double>(), 40.0);  // a round trip over a 20 ms link
+  }
   EXPECT_EQ(j["objects"].get<uint32_t>(), 36u);
   EXPECT_EQ(j["routes"].size(), 2u);
   EXPECT_EQ(j["bands"].size(), 4u);
@@ -276,10 +291,17 @@ TEST(PvsStreamBench, WritesItsReport) {
                        test::slurp(dir.file("pvs-stream.md")).size());
   EXPECT_NE(md.find("Table 7.2"), std::string::npos);
   EXPECT_NE(md.find("1,785"), std::string::npos);  // the thesis's figures beside ours
-  for (const char* f : {"pvs-stream/route1.svg", "pvs-stream/route2.svg", "pvs-stream/band.csv", "pvs-stream/seeds.csv"})
+  EXPECT_NE(md.find("## Over sockets"), std::string::npos);
+  EXPECT_EQ(j["clients"]["clients"].get<int>(), 4);
+  EXPECT_GT(j["clients"]["bytes"].get<uint64_t>(), 0u);
+  EXPECT_GE(j["clients"]["p99_ms"].get<double>(), j["clients"]["p50_ms"].get<double>());
+  EXPECT_GT(j["clients"]["peak_session_bytes"].get<uint64_t>(), 0u);
+  for (const char* f : {"pvs-stream/route1.svg", "pvs-stream/route2.svg", "pvs-stream/band.csv", "pvs-stream/seeds.csv",
+                        "pvs-stream/sockets.csv"})
     EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
   // Bad options: one line, a non-zero exit.
-  for (const char* args : {"bench pvs-stream --band 0.6", "bench pvs-stream --blob-min 3 --blob-max 2", "bench pvs-stream --blocks 1"}) {
+  for (const char* args : {"bench pvs-stream --band 0.6", "bench pvs-stream --blob-min 3 --blob-max 2", "bench pvs-stream --blocks 1",
+                           "bench pvs-stream --prefetchers psychic", "bench pvs-stream --net-paths sideways"}) {
     const test::CommandResult r = test::run_cellwalk(std::string(args) + " --out " + dir.file("x"));
     EXPECT_NE(r.exit_code, 0) << args;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;

@@ -1,6 +1,7 @@
 // Strategy names with settings, "base[:key=value,...]": see strategy_config.hpp.
 #include "strategy/strategy_config.hpp"
 
+#include <cmath>
 #include <cstdlib>
 #include <sstream>
 
@@ -15,6 +16,12 @@ double StrategySetting::number(double lo, double hi) const {
     fail("strategy \"" + name + "\"", key + "=" + value + " must be a number in [" + std::to_string(lo) + ", " +
                                           std::to_string(hi) + "]");
   return v;
+}
+
+int StrategySetting::whole(int lo, int hi) const {
+  const double v = number(lo, hi);
+  if (v != std::floor(v)) fail("strategy \"" + name + "\"", key + "=" + value + " is not a whole number");
+  return int(v);
 }
 
 void StrategySetting::choice(std::initializer_list<const char*> options) const {

@@ -15,6 +15,8 @@ struct StrategySetting {
 
   // The value as a number in [lo, hi]; fails on anything else.
   double number(double lo, double hi) const;
+  // The value as a whole number in [lo, hi]; fails on anything else.
+  int whole(int lo, int hi) const;
   // Fails unless the value is one of `options`.
   void choice(std::initializer_list<const char*> options) const;
   // Fails: the key is not a setting of this strategy; `known` lists the ones that are.

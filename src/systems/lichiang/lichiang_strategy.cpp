@@ -28,13 +28,6 @@ bool is_lichiang_strategy_name(const std::string& name) {
 
 namespace {
 
-// A setting that must be a whole number in [lo, hi].
-int whole(const StrategySetting& s, int lo, int hi) {
-  const double v = s.number(lo, hi);
-  if (v != std::floor(v)) fail("strategy \"" + s.name + "\"", s.key + "=" + s.value + " is not a whole number");
-  return int(v);
-}
-
 // A setting's number as the name gives it back (shortest form: 5, 2.5, 1e-05).
 std::string number_text(double v) {
   char text[32];
@@ -57,9 +50,9 @@ LiChiangConfig parse_lichiang_strategy_name(const std::string& name) {
       s.choice({"none", "one-step", "relevance"});
       c.prefetch = s.value == "none" ? LiChiangConfig::Prefetch::kNone
                    : s.value == "one-step" ? LiChiangConfig::Prefetch::kOneStep : LiChiangConfig::Prefetch::kRelevance;
-    } else if (s.key == "sectors") c.sectors = whole(s, 1, 64);
-    else if (s.key == "neighbours") c.neighbours = whole(s, 0, 1) != 0;
-    else if (s.key == "cull") c.cull = whole(s, 0, 1) != 0;
+    } else if (s.key == "sectors") c.sectors = s.whole(1, 64);
+    else if (s.key == "neighbours") c.neighbours = s.whole(0, 1) != 0;
+    else if (s.key == "cull") c.cull = s.whole(0, 1) != 0;
     else if (s.key == "tp_ms") c.tp_ms = s.number(0, 1e6);
     else if (s.key == "frame_ms") c.frame_ms = s.number(0, 1e6);
     else s.unknown("cache, prefetch, sectors, neighbours, cull, tp_ms, frame_ms");

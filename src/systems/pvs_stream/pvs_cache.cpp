@@ -25,6 +25,26 @@ std::vector<uint32_t> minus(const std::vector<uint32_t>& a, const std::vector<ui
   return out;
 }
 
+size_t replacement_victim(const std::vector<GridCell>& cells, const std::vector<GridCell>& area, GridCell current) {
+  const auto in_area = [&](const GridCell& c) { return std::find(area.begin(), area.end(), c) != area.end(); };
+  size_t victim = cells.size();
+  int victim_distance = 0;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (in_area(cells[i])) continue;
+    const int d = chebyshev(cells[i], current);
+    if (d > victim_distance) {  // the farthest; among equals the oldest (first found)
+      victim = i;
+      victim_distance = d;
+    }
+  }
+  if (victim < cells.size() && victim_distance > 1) return victim;
+  // Every row left neighbours the viewpoint: only a table smaller than 9 gets here; replace the
+  // oldest row outside the area.
+  for (size_t i = 0; i < cells.size(); ++i)
+    if (!in_area(cells[i])) return i;
+  return cells.size();
+}
+
 ClientPvsCache::ClientPvsCache(const ViewcellGrid& grid, const PvsTable& table, size_t entries)
     : grid_(grid), table_(table), entries_(entries) {
   if (entries == 0) throw Error("PVS cache: it needs at least one entry");
@@ -51,25 +71,10 @@ Transaction ClientPvsCache::update(GridCell current, const std::vector<GridCell>
 
   // §7.4: replace rows while over capacity; never one of the area (REQUIRES: it fits).
   while (cells_.size() > entries_) {
-    auto victim = cells_.end();
-    int victim_distance = 0;
-    for (auto it = cells_.begin(); it != cells_.end(); ++it) {
-      if (std::find(area.begin(), area.end(), *it) != area.end()) continue;
-      const int d = chebyshev(*it, current);
-      if (d > victim_distance) {  // the farthest; among equals the oldest (first found)
-        victim = it;
-        victim_distance = d;
-      }
-    }
-    if (victim == cells_.end() || victim_distance <= 1) {
-      // Every row left neighbours the viewpoint: only a table smaller than 9 gets here; replace
-      // the oldest row outside the area.
-      victim = std::find_if(cells_.begin(), cells_.end(),
-                            [&](const GridCell& c) { return std::find(area.begin(), area.end(), c) == area.end(); });
-      if (victim == cells_.end()) throw Error("PVS cache: the prefetching area has more cells than the cache entries");
-    }
-    t.evicted.push_back(*victim);
-    cells_.erase(victim);
+    const size_t victim = replacement_victim(cells_, area, current);
+    if (victim == cells_.size()) throw Error("PVS cache: the prefetching area has more cells than the cache entries");
+    t.evicted.push_back(cells_[victim]);
+    cells_.erase(cells_.begin() + ptrdiff_t(victim));
   }
   if (!t.evicted.empty()) {
     std::vector<const std::vector<uint32_t>*> evicted_rows, kept_rows;

@@ -157,9 +157,12 @@ struct PvsServer::Impl {
       ++sent;
     }
     s.connection->send(uint8_t(PvsMessage::done), encode_done({f.sequence, sent}));
+    uint64_t session_bytes = 0;
+    for (const auto& [id, other] : sessions) session_bytes += other->held.capacity() + other->connection->queued_bytes();
     const std::lock_guard lock(stats_mutex);
     ++stats.fetches;
     stats.objects_sent += sent;
+    stats.peak_session_bytes = std::max(stats.peak_session_bytes, session_bytes);
   }
 };
 

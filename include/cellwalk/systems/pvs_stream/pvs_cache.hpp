@@ -22,6 +22,12 @@ struct PvsTable {
 std::vector<uint32_t> union_of(const std::vector<const std::vector<uint32_t>*>& rows);
 std::vector<uint32_t> minus(const std::vector<uint32_t>& a, const std::vector<uint32_t>& b);
 
+// §7.4's choice of the row to replace among `cells` (oldest first) with the viewpoint in `current`:
+// never a cell of `area`; a row that is no neighbour of `current` (D_r > 1 or D_c > 1), the
+// farthest first, then the oldest; failing that the oldest outside the area. cells.size() when
+// every row is in the area.
+size_t replacement_victim(const std::vector<GridCell>& cells, const std::vector<GridCell>& area, GridCell current);
+
 // What one prefetching transaction did.
 struct Transaction {
   std::vector<GridCell> requested;  // J: the rows fetched (the area's cells not cached)

@@ -28,6 +28,9 @@ struct PvsServerOptions {
 
 struct PvsServerStats {
   uint64_t sessions_opened = 0, sessions_dropped = 0, fetches = 0, objects_sent = 0, bytes_sent = 0;
+  // What the sessions held at the most: each one's mirror of its client's objects and its
+  // replies not yet written (the world and its sets are shared and counted apart).
+  uint64_t peak_session_bytes = 0;
 };
 
 // The grid a world's stored sets lie on, as a Welcome (without world_bytes). Throws Error when
