@@ -39,7 +39,7 @@ std::vector<char> read_with_ifstream(const std::string& path, uint64_t offset, s
   return bytes;
 }
 
-std::string error_of(const std::function<void()>& f) {
+std::string page_file_error(const std::function<void()>& f) {
   try {
     f();
   } catch (const Error& e) {
@@ -158,15 +158,15 @@ TEST(PageFile, ConcurrentReadersGetExactBytesAndCounters) {
 TEST(PageFile, RejectsBadPageSizesAndMissingFilesAndReadsPastTheEnd) {
   test::TempDir dir;
   const std::string path = write_file(dir.file("f"), random_bytes(4096 * 4 + 100, 1));
-  EXPECT_NE(error_of([&] { PageFile(path, {.page_size = 1000}); }).find("power of two"),
+  EXPECT_NE(page_file_error([&] { PageFile(path, {.page_size = 1000}); }).find("power of two"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { PageFile(path, {.page_size = 256}); }).find("power of two"),
+  EXPECT_NE(page_file_error([&] { PageFile(path, {.page_size = 256}); }).find("power of two"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { PageFile(dir.file("missing"), {}); }).find("missing"), std::string::npos);
+  EXPECT_NE(page_file_error([&] { PageFile(dir.file("missing"), {}); }).find("missing"), std::string::npos);
   PageFile file(path, {});
   EXPECT_EQ(file.page_count(), 4u);  // the partial tail is not a page
   std::vector<char> buffer(4096 * 2);
-  const std::string message = error_of([&] { file.read(3, 2, buffer.data()); });
+  const std::string message = page_file_error([&] { file.read(3, 2, buffer.data()); });
   EXPECT_NE(message.find(path), std::string::npos) << message;
   EXPECT_NE(message.find("@ byte 12288"), std::string::npos) << message;
   EXPECT_EQ(file.counters().requests, 0u);
@@ -191,7 +191,7 @@ TEST(PageFile, IoErrorNamesFileAndOffset) {
   f.faults->add_rule({.begin = 5 * 4096 + 10, .end = 5 * 4096 + 11, .fault = FaultInjectingSource::Fault::kError, .error_number = EIO});
   std::vector<char> buffer(4096 * 8);
   f.file->read(0, 5, buffer.data());  // pages 0-4 do not touch the faulty byte
-  const std::string message = error_of([&] { f.file->read(2, 4, buffer.data()); });
+  const std::string message = page_file_error([&] { f.file->read(2, 4, buffer.data()); });
   EXPECT_NE(message.find(f.path), std::string::npos) << message;
   EXPECT_NE(message.find("@ byte 8192"), std::string::npos) << message;
   EXPECT_NE(message.find("errno 5"), std::string::npos) << message;
@@ -226,7 +226,7 @@ TEST(PageFile, EndlessInterruptsOrShortReadsFailInsteadOfHanging) {
   FaultyFile f(dir, /*bypass=*/true);
   f.faults->add_rule({.begin = 4096 * 2, .end = 4096 * 3, .fault = FaultInjectingSource::Fault::kShort, .short_bytes = 100});
   std::vector<char> buffer(4096 * 2);
-  const std::string message = error_of([&] { f.file->read(1, 2, buffer.data()); });
+  const std::string message = page_file_error([&] { f.file->read(1, 2, buffer.data()); });
   if (f.faults->alignment() > 1) {
     // 100-byte reads never complete a page under O_DIRECT.
     EXPECT_NE(message.find("no progress"), std::string::npos) << message;

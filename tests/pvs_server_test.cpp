@@ -7,6 +7,7 @@
 #include <utility>
 #include <boost/asio.hpp>
 #include <chrono>
+#include <filesystem>
 #include <set>
 #include <thread>
 
@@ -18,6 +19,7 @@
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
 #include "cellwalk/systems/pvs_stream_client/pvs_stream_strategy.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
+#include "experiments/common/web_server.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -348,6 +350,29 @@ TEST_F(PvsStreamClientTest, TheBudgetBoundsTheStore) {
 }
 
 // Names the strategy refuses, each with what to write instead.
+// The same walkthrough with no PVS server: the world file behind Debian's nginx, its rows and
+// objects read by HTTP range requests; every frame again draws its cell's stored set.
+TEST_F(PvsStreamClientTest, AWebServerServesTheSameWalk) {
+  const test::TempDir work;
+  const std::string file = inputs_->file("city.cww");
+  const bench::WebServer web(std::filesystem::path(file).parent_path().string(), work.file("nginx"));
+  auto s = client("pvs-stream:pace=0,server=" + web.url("city.cww"));
+  const std::vector<StreamedFrame> frames = stream(*s);
+  EXPECT_GT(exact_frames(frames), frames.size() / 2);
+  const PvsStreamCounters c = s->counters();
+  EXPECT_EQ(c.late_frames, 0u);
+  EXPECT_GE(c.transactions, 2u);
+  EXPECT_GT(c.objects_received, 0u);
+  EXPECT_GE(c.bytes_received, c.objects_received * 12);  // whole pages: at least the objects' bytes
+  const std::string wrong = web.url("elsewhere.cww");
+  try {
+    client("pvs-stream:server=" + wrong);
+    ADD_FAILURE() << "a missing file was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("404"), std::string::npos) << e.what();
+  }
+}
+
 TEST(PvsStreamStrategyName, BadSettingsAreRefused) {
   EXPECT_EQ(parse_pvs_stream_strategy_name("pvs-stream").prefetch, PvsStreamConfig::Prefetch::kPbnp);
   EXPECT_EQ(parse_pvs_stream_strategy_name("pvs-stream:prefetch=speed").band, 0.05);
@@ -355,10 +380,12 @@ TEST(PvsStreamStrategyName, BadSettingsAreRefused) {
   EXPECT_EQ(c.host, "localhost");
   EXPECT_EQ(c.port, 7000);
   EXPECT_EQ(c.entries, 12);
+  EXPECT_EQ(parse_pvs_stream_strategy_name("pvs-stream:server=http://127.0.0.1:8080/w.cww,latency_ms=40").url,
+            "http://127.0.0.1:8080/w.cww");
   for (const std::string bad : {"pvs-stream:prefetch=psychic", "pvs-stream:prefetch=snp,entries=8", "pvs-stream:entries=3",
                                 "pvs-stream:prefetch=snp,band=0.2", "pvs-stream:band=0.5", "pvs-stream:server=7000",
                                 "pvs-stream:server=host:70000", "pvs-stream:server=h:1,latency_ms=5", "pvs-stream:pace=2",
-                                "pvs-stream:colour=red"}) {
+                                "pvs-stream:colour=red", "pvs-stream:server=http://h:0/w.cww", "pvs-stream:server=https://h/w"}) {
     try {
       parse_pvs_stream_strategy_name(bad);
       ADD_FAILURE() << bad << " was accepted";

@@ -19,6 +19,7 @@
 #include <cstdint>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/store/http_read_source.hpp"
 
 namespace cellwalk {
 namespace {
@@ -164,15 +165,23 @@ size_t checked_page_size(size_t page_size) {
 
 PageFile::PageFile(const std::string& path, Options options)
     : page_size_(checked_page_size(options.page_size)) {
-  auto file = std::make_unique<FileReadSource>(path, options.bypass_cache, page_size_);
-  mode_ = file->mode();
-  source_ = std::move(file);
-  if (options.read_latency_us > 0) source_ = std::make_unique<DelayedReadSource>(std::move(source_), options.read_latency_us);
+  if (is_http_url(path)) {
+    source_ = std::make_unique<HttpReadSource>(path);
+  } else {
+    auto file = std::make_unique<FileReadSource>(path, options.bypass_cache, page_size_);
+    mode_ = file->mode();
+    source_ = std::move(file);
+  }
+  if (options.read_latency_us > 0 || options.read_bandwidth_mbit > 0)
+    source_ = std::make_unique<DelayedReadSource>(std::move(source_), options.read_latency_us, options.read_bandwidth_mbit);
 }
 
 long DelayedReadSource::read_at(void* dst, size_t bytes, uint64_t offset) {
   std::this_thread::sleep_for(std::chrono::microseconds(latency_us_));
-  return inner_->read_at(dst, bytes, offset);
+  const long got = inner_->read_at(dst, bytes, offset);
+  if (got > 0 && bandwidth_mbit_ > 0)
+    std::this_thread::sleep_for(std::chrono::duration<double>(double(got) * 8.0 / (bandwidth_mbit_ * 1e6)));
+  return got;
 }
 
 PageFile::PageFile(std::unique_ptr<ReadSource> source, size_t page_size)

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/store/http_read_source.hpp"
 #include "cellwalk/store/page_file.hpp"
 #include "cellwalk/store/world_file.hpp"
 #include "core/bytes.hpp"
@@ -25,7 +26,11 @@ std::vector<uint8_t> read_pages(PageFile& file, uint64_t first_page, uint64_t pa
 
 bool is_world_file(const std::string& path) {
   char magic[8] = {};
-  std::ifstream(path, std::ios::binary).read(magic, 8);
+  if (!is_http_url(path)) {
+    std::ifstream(path, std::ios::binary).read(magic, 8);
+  } else if (HttpReadSource source(path); source.size() >= 8) {  // an unreachable URL throws
+    source.read_at(magic, 8, 0);
+  }
   return std::memcmp(magic, world_layout::kMagic, 8) == 0;
 }
 
@@ -41,7 +46,8 @@ WorldFile::WorldFile(const std::string& path, Options options) : path_(path) {
     auto h = world_layout::decode_header(first, path, probe.size_bytes());
     page_size_ = h.page_size;
   }
-  pages_ = std::make_unique<PageFile>(path, PageFile::Options{page_size_, options.bypass_cache, options.read_latency_us});
+  pages_ = std::make_unique<PageFile>(path, PageFile::Options{page_size_, options.bypass_cache, options.read_latency_us,
+                                                               options.read_bandwidth_mbit});
   auto header_page = read_pages(*pages_, 0, 1);
   const auto h = world_layout::decode_header(header_page, path, pages_->size_bytes());
   page_count_ = h.page_count;

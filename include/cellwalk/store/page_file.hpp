@@ -102,13 +102,15 @@ class FaultInjectingSource final : public ReadSource {
   std::vector<Rule> rules_;
 };
 
-// A slow disk, for experiments (issue 18: Li & Chiang's cases on a slow disk): forwards to
-// `inner` after sleeping `latency_us` microseconds per read_at call, as a seek would cost.
+// A slow disk or a slow link, for experiments (issue 18: Li & Chiang's cases on a slow disk;
+// issue 20: a world behind a web server over an 80 ms link): forwards to `inner` after sleeping
+// `latency_us` microseconds per read_at call, as a seek or a round trip would cost, and after
+// the read sleeps as long as its bytes take at `bandwidth_mbit` (0: no limit).
 // Thread-safety: as `inner`; concurrent reads wait side by side, as on a disk with a queue.
 class DelayedReadSource final : public ReadSource {
  public:
-  DelayedReadSource(std::unique_ptr<ReadSource> inner, uint32_t latency_us)
-      : inner_(std::move(inner)), latency_us_(latency_us) {}
+  DelayedReadSource(std::unique_ptr<ReadSource> inner, uint32_t latency_us, double bandwidth_mbit = 0.0)
+      : inner_(std::move(inner)), latency_us_(latency_us), bandwidth_mbit_(bandwidth_mbit) {}
 
   long read_at(void* dst, size_t bytes, uint64_t offset) override;
   uint64_t size() const override { return inner_->size(); }
@@ -120,6 +122,7 @@ class DelayedReadSource final : public ReadSource {
  private:
   std::unique_ptr<ReadSource> inner_;
   uint32_t latency_us_;
+  double bandwidth_mbit_;
 };
 
 struct PageFileCounters {
@@ -135,9 +138,11 @@ class PageFile {
     size_t page_size = 4096;    // REQUIRES: a power of two >= 512
     bool bypass_cache = false;  // O_DIRECT, else drop-behind; see FileReadSource
     uint32_t read_latency_us = 0;  // > 0: every read waits this long first (DelayedReadSource)
+    double read_bandwidth_mbit = 0.0;  // > 0: and as long as its bytes take at this rate
   };
 
-  // Opens `path` read-only. Throws Error naming the path on failure.
+  // Opens `path` read-only: a file, or a URL (http://..., an HttpReadSource; bypass_cache has no
+  // meaning there). Throws Error naming the path on failure.
   PageFile(const std::string& path, Options options);
   // Reads through `source` (tests: a FaultInjectingSource).
   PageFile(std::unique_ptr<ReadSource> source, size_t page_size);

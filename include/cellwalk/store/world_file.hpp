@@ -14,7 +14,8 @@ namespace cellwalk {
 
 constexpr uint32_t kDefaultPageSize = 4096;
 
-// Whether `path` starts with the world file's magic (false for anything unreadable).
+// Whether `path` starts with the world file's magic (false for an unreadable file; a URL whose
+// server cannot be reached throws Error, naming it).
 bool is_world_file(const std::string& path);
 
 struct SectionInfo {
@@ -63,7 +64,9 @@ class WorldFile {
   struct Options {
     bool bypass_cache = false;  // read around the OS page cache (O_DIRECT or drop-behind)
     uint32_t read_latency_us = 0;  // a slow disk: each read waits this long first (experiments)
+    double read_bandwidth_mbit = 0.0;  // a slow link: and as long as its bytes take at this rate
   };
+  // `path` is a file or a URL (http://host:port/path.cww, read by range requests).
   WorldFile(const std::string& path, Options options);
   ~WorldFile();
 

@@ -9,6 +9,7 @@
 #include <thread>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/store/page_file.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 
 namespace cellwalk::pvs_stream {
@@ -48,6 +49,28 @@ Welcome grid_of(const World& world) {
     if (p.cell(CellId(c)).computed()) slot = uint32_t(c);
   }
   return w;
+}
+
+PlannedReply plan_reply(const visibility::StoredPvs& pvs, std::vector<uint8_t>& held, const FetchRequest& f) {
+  for (uint32_t id : f.dropped) held[id] = 0;
+  PlannedReply out{{f.sequence, {}}, {}};
+  std::vector<uint32_t> wanted;
+  for (uint32_t cell : f.cells) {
+    if (!pvs.partition().cell(cell).computed())
+      throw net::ProtocolError("cell " + std::to_string(cell) + " has no visible set (solid or skipped)");
+    std::vector<uint32_t> ids;
+    if (const auto set = pvs.set(cell)) ids.assign(set->objects.begin(), set->objects.end());
+    wanted.insert(wanted.end(), ids.begin(), ids.end());
+    out.rows.rows.emplace_back(cell, std::move(ids));
+  }
+  std::sort(wanted.begin(), wanted.end());
+  wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
+  for (uint32_t id : wanted)
+    if (!held[id]) {
+      held[id] = 1;
+      out.send.push_back(id);
+    }
+  return out;
 }
 
 // ---- The server --------------------------------------------------------------------------
@@ -134,28 +157,13 @@ struct PvsServer::Impl {
 
   // §7.3: the rows asked for, then the geometry of their union less what the client holds.
   void fetch(Session& s, const FetchRequest& f) {
-    for (uint32_t id : f.dropped) s.held[id] = 0;
-    RowsReply rows{f.sequence, {}};
-    std::vector<uint32_t> wanted;
-    for (uint32_t cell : f.cells) {
-      if (!pvs.partition().cell(cell).computed())
-        throw net::ProtocolError("cell " + std::to_string(cell) + " has no visible set (solid or skipped)");
-      std::vector<uint32_t> ids;
-      if (const auto set = pvs.set(cell)) ids.assign(set->objects.begin(), set->objects.end());
-      wanted.insert(wanted.end(), ids.begin(), ids.end());
-      rows.rows.emplace_back(cell, std::move(ids));
-    }
-    s.connection->send(uint8_t(PvsMessage::rows), encode_rows(rows));
-    std::sort(wanted.begin(), wanted.end());
-    wanted.erase(std::unique(wanted.begin(), wanted.end()), wanted.end());
-    uint32_t sent = 0;
-    for (uint32_t id : wanted) {
-      if (s.held[id]) continue;
+    PlannedReply plan = plan_reply(pvs, s.held, f);
+    s.connection->send(uint8_t(PvsMessage::rows), encode_rows(plan.rows));
+    for (uint32_t id : plan.send) {
       const uint32_t level = std::min(f.level, world.object(id).lod_count - 1);
       s.connection->send(uint8_t(PvsMessage::object), encode_object({f.sequence, id, level, world.read_level(id, level)}));
-      s.held[id] = 1;
-      ++sent;
     }
+    const uint32_t sent = uint32_t(plan.send.size());
     s.connection->send(uint8_t(PvsMessage::done), encode_done({f.sequence, sent}));
     uint64_t session_bytes = 0;
     for (const auto& [id, other] : sessions) session_bytes += other->held.capacity() + other->connection->queued_bytes();
@@ -256,7 +264,7 @@ PvsClient::~PvsClient() = default;
 
 const Welcome& PvsClient::welcome() const { return impl_->welcome; }
 
-PvsClient::Reply PvsClient::fetch(const FetchRequest& request) {
+PvsReply PvsClient::fetch(const FetchRequest& request) {
   impl_->send(PvsMessage::fetch, encode_fetch(request));
   Reply reply;
   for (;;) {
@@ -278,6 +286,54 @@ PvsClient::Reply PvsClient::fetch(const FetchRequest& request) {
       throw Error(impl_->where + ": " + e.what());
     }
   }
+}
+
+}  // namespace cellwalk::pvs_stream
+
+namespace cellwalk::pvs_stream {
+
+// ---- The world file as the source ---------------------------------------------------------
+
+struct PvsFileSource::Impl {
+  const World& world;
+  visibility::StoredPvs pvs;
+  Welcome welcome;
+  std::vector<uint8_t> held;
+  std::atomic<bool> cancelled{false};
+
+  explicit Impl(const World& w) : world(w), pvs(w), welcome(grid_of(w)), held(w.object_count(), 0) {
+    welcome.world_bytes = w.file().pages().size_bytes();
+  }
+
+  void check_cancelled() const {
+    if (cancelled.load()) fail(world.file().path(), "the fetch was cancelled");
+  }
+};
+
+PvsFileSource::PvsFileSource(const World& world) : impl_(std::make_unique<Impl>(world)) {}
+PvsFileSource::~PvsFileSource() = default;
+const Welcome& PvsFileSource::welcome() const { return impl_->welcome; }
+void PvsFileSource::cancel() { impl_->cancelled = true; }
+
+PvsReply PvsFileSource::fetch(const FetchRequest& request) {
+  Impl& m = *impl_;
+  m.check_cancelled();
+  const uint64_t before = m.world.file().pages().counters().bytes;
+  PvsReply reply;
+  PlannedReply plan;
+  try {
+    plan = plan_reply(m.pvs, m.held, request);
+  } catch (const net::ProtocolError& e) {
+    fail(m.world.file().path(), e.what());
+  }
+  reply.rows = std::move(plan.rows);
+  for (uint32_t id : plan.send) {
+    m.check_cancelled();
+    const uint32_t level = std::min(request.level, m.world.object(id).lod_count - 1);
+    reply.objects.push_back({request.sequence, id, level, m.world.read_level(id, level)});
+  }
+  reply.bytes = m.world.file().pages().counters().bytes - before;
+  return reply;
 }
 
 }  // namespace cellwalk::pvs_stream

@@ -14,6 +14,7 @@
 #include <unordered_map>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/store/http_read_source.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_cache.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
 #include "core/stopwatch.hpp"
@@ -38,10 +39,17 @@ PvsStreamConfig parse_pvs_stream_strategy_name(const std::string& name) {
     } else if (s.key == "band") {
       c.band = s.number(0.01, 0.45);
       band_given = true;
+    } else if (s.key == "server" && is_http_url(s.value)) {
+      try {  // a bad URL is refused with the name, not at the first fetch
+        parse_http_url(s.value);
+      } catch (const Error& e) {
+        fail("strategy \"" + name + "\"", e.what());
+      }
+      c.url = s.value;
     } else if (s.key == "server") {
       const size_t colon = s.value.rfind(':');
       if (colon == std::string::npos || colon == 0)
-        fail("strategy \"" + name + "\"", "server=" + s.value + " must be HOST:PORT (e.g. server=127.0.0.1:7878)");
+        fail("strategy \"" + name + "\"", "server=" + s.value + " must be HOST:PORT (e.g. server=127.0.0.1:7878) or the world's URL on a web server (http://HOST:PORT/PATH.cww)");
       c.host = s.value.substr(0, colon);
       c.port = uint16_t(StrategySetting{s.name, "server port", s.value.substr(colon + 1)}.whole(1, 65535));
     } else if (s.key == "latency_ms") {
@@ -60,6 +68,7 @@ PvsStreamConfig parse_pvs_stream_strategy_name(const std::string& name) {
   if (c.prefetch == PvsStreamConfig::Prefetch::kSpeed && !band_given) c.band = 0.05;
   if (c.prefetch == PvsStreamConfig::Prefetch::kSnp && band_given)
     fail("strategy \"" + name + "\"", "band sets PBNP's regions; snp prefetches on cell changes and has none");
+  if (!c.url.empty() && !c.host.empty()) fail("strategy \"" + name + "\"", "give one server=");
   if (!c.host.empty() && link_given)
     fail("strategy \"" + name + "\"", "latency_ms and bandwidth_mbit shape the link of the strategy's own server; "
                                       "shape a running server with `cellwalk serve --latency-ms --bandwidth-mbit`");
@@ -89,7 +98,8 @@ struct PvsStreamStrategy::Impl {
   const StrategyOptions options;
   std::unique_ptr<PvsServer> server;  // the strategy's own (config.host empty)
   std::thread server_thread;
-  std::unique_ptr<PvsClient> client;
+  std::unique_ptr<World> remote;     // the world behind a web server (config.url)
+  std::unique_ptr<PvsSource> source;
   Welcome welcome;
   std::optional<ViewcellGrid> grid;
   std::unordered_map<uint32_t, uint32_t> grid_index_of_cell;  // cell id → row * cols + col
@@ -123,14 +133,22 @@ struct PvsStreamStrategy::Impl {
   ~Impl() { shutdown(); }
 
   std::string where() const {
+    if (!config.url.empty()) return "pvs-stream (" + config.url + ")";
     return "pvs-stream (" + (config.host.empty() ? std::string("its own server") : config.host + ":" + std::to_string(config.port)) + ")";
   }
 
-  void start() {
-    const Welcome local = grid_of(world);  // throws, naming the command, without grid sets
+  // The source of rows and objects: a web server's file, a running server, or the strategy's own.
+  void connect() {
+    const net::LinkShape link{config.latency_ms, config.bandwidth_mbit};
+    if (!config.url.empty()) {
+      // One range request is one round trip: both directions' delay, and the bytes at the rate.
+      remote = std::make_unique<World>(config.url, WorldFile::Options{.read_latency_us = uint32_t(std::lround(2000.0 * config.latency_ms)),
+                                                                      .read_bandwidth_mbit = config.bandwidth_mbit});
+      source = std::make_unique<PvsFileSource>(*remote);
+      return;
+    }
     std::string host = config.host;
     uint16_t port = config.port;
-    const net::LinkShape link{config.latency_ms, config.bandwidth_mbit};
     if (host.empty()) {
       PvsServerOptions so;
       so.link = link;
@@ -139,8 +157,13 @@ struct PvsStreamStrategy::Impl {
       host = "127.0.0.1";
       port = server->port();
     }
-    client = std::make_unique<PvsClient>(host, port, config.host.empty() ? link : net::LinkShape{});
-    welcome = client->welcome();
+    source = std::make_unique<PvsClient>(host, port, config.host.empty() ? link : net::LinkShape{});
+  }
+
+  void start() {
+    const Welcome local = grid_of(world);  // throws, naming the command, without grid sets
+    connect();
+    welcome = source->welcome();
     if (welcome.objects != local.objects || welcome.cell_count != local.cell_count || welcome.cells != local.cells)
       fail(where(), "serves another world (" + std::to_string(welcome.objects) + " objects, " +
                         std::to_string(welcome.cell_count) + " cells; this one has " + std::to_string(local.objects) +
@@ -161,6 +184,7 @@ struct PvsStreamStrategy::Impl {
     }
     changed.notify_all();
     if (server) server->stop();  // ends a fetch in flight: the network thread sees `stopping`
+    if (source) source->cancel();
     if (network.joinable()) network.join();
     if (server_thread.joinable()) server_thread.join();
   }
@@ -176,7 +200,7 @@ struct PvsStreamStrategy::Impl {
     return out;
   }
   uint64_t resident() const {
-    uint64_t bytes = held_bytes;
+    uint64_t bytes = held_bytes + (remote ? remote->resident_bytes() : 0);
     for (const auto& [index, ids] : rows) bytes += ids.size() * sizeof(uint32_t);
     return bytes;
   }
@@ -195,11 +219,11 @@ struct PvsStreamStrategy::Impl {
       ++counters.transactions;
       lock.unlock();
       const Stopwatch watch;
-      PvsClient::Reply reply;
+      PvsReply reply;
       std::vector<Held> decoded;
       std::string error;
       try {
-        reply = client->fetch(request);
+        reply = source->fetch(request);
         decoded = decode(reply);
       } catch (const std::exception& e) {
         error = e.what();
@@ -218,7 +242,7 @@ struct PvsStreamStrategy::Impl {
   }
 
   // The objects of a reply, checked against the world and decoded (off the lock).
-  std::vector<Held> decode(const PvsClient::Reply& reply) const {
+  std::vector<Held> decode(const PvsReply& reply) const {
     std::vector<Held> out;
     for (const ObjectReply& o : reply.objects) {
       if (o.id >= world.object_count() || o.level >= world.object(o.id).lod_count)
@@ -232,7 +256,7 @@ struct PvsStreamStrategy::Impl {
 
   // Takes a reply into the cache and replaces rows as §7.4 says. REQUIRES: mutex held. Returns
   // what is wrong with the reply, or "".
-  std::string admit(const FetchRequest& request, const PvsClient::Reply& reply, std::vector<Held> decoded, double ms) {
+  std::string admit(const FetchRequest& request, const PvsReply& reply, std::vector<Held> decoded, double ms) {
     if (reply.rows.rows.size() != request.cells.size()) return where() + ": a reply whose rows are not the cells asked for";
     for (size_t i = 0; i < reply.objects.size(); ++i) {
       Held& h = objects[reply.objects[i].id];

@@ -16,6 +16,7 @@
 #include "cellwalk/net/connection.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_protocol.hpp"
+#include "cellwalk/visibility/stored_pvs.hpp"
 
 namespace cellwalk::pvs_stream {
 
@@ -54,21 +55,65 @@ class PvsServer {
   std::unique_ptr<Impl> impl_;
 };
 
+// §7.3's answer to one fetch: the rows asked for and the objects of their union that `held`
+// (the mirror of what the client holds, one byte per object) lacks, in id order; marks those
+// held. The client's drops are applied first. Throws net::ProtocolError naming a cell without
+// a visible set.
+struct PlannedReply {
+  RowsReply rows;
+  std::vector<uint32_t> send;
+};
+PlannedReply plan_reply(const visibility::StoredPvs& pvs, std::vector<uint8_t>& held, const FetchRequest& request);
+
+// The whole answer to one fetch, as a client sees it.
+struct PvsReply {
+  RowsReply rows;
+  std::vector<ObjectReply> objects;
+  uint64_t bytes = 0;  // what crossed the network for it
+};
+
+// Where a streaming client's rows and objects come from: a PVS server over its protocol
+// (PvsClient) or a world file read directly (PvsFileSource; a remote one by HTTP range requests
+// from a plain web server). Thread-safety: none, except cancel().
+class PvsSource {
+ public:
+  virtual ~PvsSource() = default;
+  virtual const Welcome& welcome() const = 0;
+  // One fetch and its whole reply. Throws Error when the source fails or refuses.
+  virtual PvsReply fetch(const FetchRequest& request) = 0;
+  // Makes a fetch in flight (or the next) end soon with an Error; callable from any thread.
+  virtual void cancel() {}
+};
+
 // A client that waits for each reply (tests, tools). Its own direction is shaped too: a fetch
 // leaves after `outgoing`'s delay. Thread-safety: none.
-class PvsClient {
+class PvsClient final : public PvsSource {
  public:
   // Connects and exchanges hello/welcome. Throws Error when it cannot.
   PvsClient(const std::string& host, uint16_t port, net::LinkShape outgoing = {});
-  ~PvsClient();
-  const Welcome& welcome() const;
-  struct Reply {
-    RowsReply rows;
-    std::vector<ObjectReply> objects;
-    uint64_t bytes = 0;  // every frame of the reply
-  };
-  // One fetch and its whole reply. Throws Error if the server answers with an error or closes.
-  Reply fetch(const FetchRequest& request);
+  ~PvsClient() override;
+  const Welcome& welcome() const override;
+  using Reply = PvsReply;
+  // Throws Error if the server answers with an error or closes.
+  PvsReply fetch(const FetchRequest& request) override;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// No server: the client answers its own fetches from a world file, keeping the mirror a server
+// would keep, so it reads exactly the rows and the objects a server would send (§7.3's ΔS).
+// With the world opened from a URL this is the walkthrough served by a plain web server (issue
+// 20): every row and object is one or more HTTP range requests. `bytes` of a reply count the
+// pages read for it. REQUIRES: `world` outlives the source.
+class PvsFileSource final : public PvsSource {
+ public:
+  explicit PvsFileSource(const World& world);
+  ~PvsFileSource() override;
+  const Welcome& welcome() const override;
+  PvsReply fetch(const FetchRequest& request) override;
+  void cancel() override;
 
  private:
   struct Impl;

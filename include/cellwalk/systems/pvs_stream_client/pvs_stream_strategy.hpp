@@ -27,7 +27,9 @@ namespace cellwalk {
 //   band=0.25            pbnp's region band, a fraction of the cell (speed: its smallest)
 //   server=HOST:PORT     a running `cellwalk serve` of the same world; none: the strategy serves
 //                        the world itself on 127.0.0.1 (a real socket), with the link below
-//   latency_ms=0         that link's one-way delay, each direction
+//   server=http://H:P/W  no PVS server: the world file W on a plain web server (nginx), read by
+//                        HTTP range requests; the client finds its rows and ΔS in it itself
+//   latency_ms=0         that link's one-way delay, each direction (a range request: twice)
 //   bandwidth_mbit=0     that link's rate, each direction (0: unlimited)
 //   wait_ms=1000         the longest a frame waits for its cell's row
 //   pace=1               follow the path's clock: a frame is not drawn before its path time
@@ -38,7 +40,8 @@ struct PvsStreamConfig {
   enum class Prefetch { kSnp, kPbnp, kSpeed };
   Prefetch prefetch = Prefetch::kPbnp;
   double band = 0.25;
-  std::string host;  // empty: the strategy's own server
+  std::string url;   // the world on a web server (http://...); empty: a PVS server
+  std::string host;  // empty (and no url): the strategy's own server
   uint16_t port = 0;
   double latency_ms = 0.0, bandwidth_mbit = 0.0;
   double wait_ms = 1000.0;
