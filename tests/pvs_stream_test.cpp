@@ -276,8 +276,10 @@ TEST(PvsStreamBench, WritesItsReport) {
   p.net.bandwidths = {100};
   p.net.prefetchers = {"snp", "pbnp"};
   p.net.clients = 4;
+  p.net.nginx_prefetchers = {"pbnp"};
   const nlohmann::ordered_json j = run_pvs_stream_bench(p);
-  ASSERT_EQ(j["sockets"].size(), 2u);
+  ASSERT_EQ(j["sockets"].size(), 3u);  // snp, pbnp, and pbnp from nginx
+  EXPECT_EQ(j["sockets"][2]["server"], "nginx");
   for (const auto& run : j["sockets"]) {
     EXPECT_EQ(run["frames"].get<uint64_t>(), 90u);
     EXPECT_GT(run["transactions"].get<uint64_t>(), 0u);
@@ -292,6 +294,7 @@ TEST(PvsStreamBench, WritesItsReport) {
   EXPECT_NE(md.find("Table 7.2"), std::string::npos);
   EXPECT_NE(md.find("1,785"), std::string::npos);  // the thesis's figures beside ours
   EXPECT_NE(md.find("## Over sockets"), std::string::npos);
+  EXPECT_NE(md.find("| nginx"), std::string::npos);
   EXPECT_EQ(j["clients"]["clients"].get<int>(), 4);
   EXPECT_GT(j["clients"]["bytes"].get<uint64_t>(), 0u);
   EXPECT_GE(j["clients"]["p99_ms"].get<double>(), j["clients"]["p50_ms"].get<double>());
@@ -301,7 +304,8 @@ TEST(PvsStreamBench, WritesItsReport) {
     EXPECT_TRUE(std::filesystem::exists(dir.file(f))) << f;
   // Bad options: one line, a non-zero exit.
   for (const char* args : {"bench pvs-stream --band 0.6", "bench pvs-stream --blob-min 3 --blob-max 2", "bench pvs-stream --blocks 1",
-                           "bench pvs-stream --prefetchers psychic", "bench pvs-stream --net-paths sideways"}) {
+                           "bench pvs-stream --prefetchers psychic", "bench pvs-stream --net-paths sideways",
+                           "bench pvs-stream --nginx-prefetchers psychic"}) {
     const test::CommandResult r = test::run_cellwalk(std::string(args) + " --out " + dir.file("x"));
     EXPECT_NE(r.exit_code, 0) << args;
     EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;

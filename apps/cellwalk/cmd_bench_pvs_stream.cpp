@@ -41,6 +41,8 @@ void register_bench_pvs_stream(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--latencies", p.net.latencies, "Sockets: one-way delays, ms, each direction")->capture_default_str()->check(number_in(0, 10000));
   cmd->add_option("--bandwidths", p.net.bandwidths, "Sockets: rates, Mbit/s, each direction (0: unlimited)")->capture_default_str()->check(number_in(0, 1e6));
   cmd->add_option("--prefetchers", p.net.prefetchers, "Sockets: snp, pbnp, speed")->capture_default_str()->check(CLI::IsMember({"snp", "pbnp", "speed"}));
+  cmd->add_option("--nginx-prefetchers", p.net.nginx_prefetchers, "Sockets: the prefetchers walked again with the world on nginx (range requests); none: give --nginx-prefetchers with no value")
+      ->capture_default_str()->expected(0, -1)->check(CLI::IsMember({"snp", "pbnp", "speed"}));
   cmd->add_option("--clients", p.net.clients, "Sockets: clients on one server (0: none)")->capture_default_str()->check(integer_in(0, 1000));
   cmd->add_option("--work-dir", p.net.work_dir, "Sockets: where the city and its sets go (default: a temporary folder)");
   cmd->add_option("--out", p.out_dir, "Directory of the report (pvs-stream.md and pvs-stream/)")->capture_default_str();

@@ -18,6 +18,7 @@
 #include "cellwalk/systems/pvs_stream_client/pvs_stream_strategy.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 #include "core/progress.hpp"
+#include "experiments/common/web_server.hpp"
 #include "experiments/common/bench_support.hpp"
 #include "experiments/common/bench_world.hpp"
 #include "precompute/pvs_builder.hpp"
@@ -80,6 +81,7 @@ SocketWorld prepare(const PvsSocketBenchParams& p, const bench::WorkDir& dir) {
 struct SocketRun {
   std::string kind, prefetch;
   double latency_ms = 0, bandwidth_mbit = 0;
+  std::string url;  // "": the PVS server; else the world on nginx
   uint64_t frames = 0, missed = 0, frames_missing = 0, peak_bytes = 0;
   PvsStreamCounters c;
   double stall_share() const { return frames > 1 ? double(c.stall_frames) / double(frames - 1) : 0.0; }
@@ -88,7 +90,7 @@ struct SocketRun {
 // One walk of `path` at its own speed; the first frame (start-up) is not counted in the misses.
 SocketRun walk(const World& world, const visibility::StoredPvs& pvs, const CameraPath& path, SocketRun run) {
   const std::string name = "pvs-stream:prefetch=" + run.prefetch + ",latency_ms=" + fixed(run.latency_ms, 3) +
-                           ",bandwidth_mbit=" + fixed(run.bandwidth_mbit, 3);
+                           ",bandwidth_mbit=" + fixed(run.bandwidth_mbit, 3) + (run.url.empty() ? "" : ",server=" + run.url);
   PvsStreamStrategy s(world, parse_pvs_stream_strategy_name(name), StrategyOptions{});
   Camera camera;
   for (size_t i = 0; i < path.frames.size(); ++i) {
@@ -117,7 +119,7 @@ SocketRun walk(const World& world, const visibility::StoredPvs& pvs, const Camer
 }
 
 Json run_json(const SocketRun& r) {
-  return {{"path", r.kind}, {"latency_ms", r.latency_ms}, {"bandwidth_mbit", r.bandwidth_mbit}, {"prefetch", r.prefetch},
+  return {{"path", r.kind}, {"server", r.url.empty() ? "pvs" : "nginx"}, {"latency_ms", r.latency_ms}, {"bandwidth_mbit", r.bandwidth_mbit}, {"prefetch", r.prefetch},
           {"frames", r.frames}, {"stall_frames", r.c.stall_frames}, {"late_frames", r.c.late_frames},
           {"missed_objects", r.missed}, {"frames_missing_objects", r.frames_missing}, {"startup_ms", r.c.startup_ms},
           {"cell_crossings", r.c.cell_crossings}, {"transactions", r.c.transactions}, {"rows_replaced", r.c.cache_swaps},
@@ -220,6 +222,23 @@ PvsSocketBenchResult run_pvs_socket_bench(const PvsSocketBenchParams& p, const s
           progress.update(runs.size());
         }
   progress.finish();
+  uint64_t nginx_rss = 0;
+  if (!p.nginx_prefetchers.empty()) {
+    const bench::WebServer web(fs::path(sw.file).parent_path().string(), dir.file("nginx"));
+    Progress web_progress("bench pvs-stream: the same walks served by nginx",
+                          p.kinds.size() * p.latencies.size() * p.bandwidths.size() * p.nginx_prefetchers.size());
+    uint64_t done = 0;
+    for (const std::string& kind : p.kinds)
+      for (double latency : p.latencies)
+        for (double bandwidth : p.bandwidths)
+          for (const std::string& prefetch : p.nginx_prefetchers) {
+            runs.push_back(walk(world, pvs, sw.paths.at(kind),
+                                SocketRun{kind, prefetch, latency, bandwidth, web.url(fs::path(sw.file).filename().string())}));
+            web_progress.update(++done);
+          }
+    nginx_rss = web.resident_bytes();
+    web_progress.finish();
+  }
   std::optional<ManyClients> many;
   if (p.clients > 0) {
     Progress clients_progress("bench pvs-stream: " + std::to_string(p.clients) + " clients on one server", 1);
@@ -227,7 +246,7 @@ PvsSocketBenchResult run_pvs_socket_bench(const PvsSocketBenchParams& p, const s
     clients_progress.finish();
   }
 
-  const std::vector<std::string> header{"path", "link (one way, each direction)", "prefetch", "stall frames",
+  const std::vector<std::string> header{"path", "server", "link (one way, each direction)", "prefetch", "stall frames",
                                         "frames drawn late", "visible objects missed (frames)", "start-up ms",
                                         "cell crossings", "transactions", "rows replaced", "MB received",
                                         "KB per crossing", "transaction ms (mean / max)", "band"};
@@ -236,7 +255,7 @@ PvsSocketBenchResult run_pvs_socket_bench(const PvsSocketBenchParams& p, const s
   result.json = Json::array();
   for (const SocketRun& r : runs) {
     const double mb = double(r.c.bytes_received) / 1e6;
-    rows.push_back({r.kind, fixed(r.latency_ms, 0) + " ms, " + fixed(r.bandwidth_mbit, 0) + " Mbit/s", r.prefetch,
+    rows.push_back({r.kind, r.url.empty() ? "PVS server" : "nginx", fixed(r.latency_ms, 0) + " ms, " + fixed(r.bandwidth_mbit, 0) + " Mbit/s", r.prefetch,
                     std::to_string(r.c.stall_frames) + " (" + fixed(100 * r.stall_share(), 2) + " %)",
                     std::to_string(r.c.late_frames), std::to_string(r.missed) + " (" + std::to_string(r.frames_missing) + ")",
                     fixed(r.c.startup_ms, 0), std::to_string(r.c.cell_crossings), std::to_string(r.c.transactions),
@@ -253,9 +272,9 @@ PvsSocketBenchResult run_pvs_socket_bench(const PvsSocketBenchParams& p, const s
   result.ordering_holds = true;
   std::string ordering_misses;
   for (const SocketRun& snp : runs) {
-    if (snp.prefetch != "snp") continue;
+    if (snp.prefetch != "snp" || !snp.url.empty()) continue;
     for (const SocketRun& pbnp : runs)
-      if (pbnp.prefetch == "pbnp" && pbnp.kind == snp.kind && pbnp.latency_ms == snp.latency_ms &&
+      if (pbnp.prefetch == "pbnp" && pbnp.url.empty() && pbnp.kind == snp.kind && pbnp.latency_ms == snp.latency_ms &&
           pbnp.bandwidth_mbit == snp.bandwidth_mbit && pbnp.c.cache_swaps >= snp.c.cache_swaps) {
         result.ordering_holds = false;
         ordering_misses += " " + snp.kind + " at " + fixed(snp.latency_ms, 0) + " ms/" + fixed(snp.bandwidth_mbit, 0) + " Mbit/s;";
@@ -266,7 +285,7 @@ PvsSocketBenchResult run_pvs_socket_bench(const PvsSocketBenchParams& p, const s
   bool target_seen = false;
   result.target_met = true;
   for (const SocketRun& r : runs)
-    if (r.kind == "normal" && r.latency_ms == 80 && r.bandwidth_mbit == 100) {
+    if (r.kind == "normal" && r.latency_ms == 80 && r.bandwidth_mbit == 100 && r.url.empty()) {
       target_seen = true;
       const bool met = r.missed == 0 && r.stall_share() < 0.01;
       result.target_met = result.target_met && met;
@@ -286,7 +305,13 @@ PvsSocketBenchResult run_pvs_socket_bench(const PvsSocketBenchParams& p, const s
         std::to_string(p.frames) + " frames at 30 per second, walked at its own speed (a frame is not drawn before its "
         "path time); a frame whose cell's row has not come waits for it (a stall, at most 1 s, then it is drawn late from "
         "the last row held). Missed: the objects of the cell's stored set inside the frustum that the frame did not "
-        "draw, after the first frame (start-up). Level 0 throughout.\n\n";
+        "draw, after the first frame (start-up). Level 0 throughout.\n\n"
+        "Rows marked nginx have no PVS server: the world file is behind Debian's nginx on 127.0.0.1 and the client reads "
+        "the rows and objects it lacks itself, by HTTP range requests on kept-alive connections (the objects six at a "
+        "time, as a browser's connections to one host); each request waits the link's round trip (twice the one-way "
+        "delay) and its bytes at the link's rate. Bytes received count whole pages of the world file.";
+  if (nginx_rss) md += " nginx's resident memory after its walks: " + fixed(double(nginx_rss) / 1048576.0, 1) + " MiB.";
+  md += "\n\n";
   md += bench::md_table(header, rows, bench::Align::kFigures) + "\n";
   md += std::string("**PBNP against SNP over sockets:** PBNP replaces fewer rows than SNP on ") +
         (result.ordering_holds ? "every path and link." : "NOT every path and link (not on" + ordering_misses + ").") + "\n\n";

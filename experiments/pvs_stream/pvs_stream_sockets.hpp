@@ -5,7 +5,7 @@
 // frames, frames drawn late, visible objects missed (the cell's stored set, frustum-culled, less
 // what was drawn), bytes per cell crossing, start-up time, transactions and rows replaced. Then
 // many clients on one server: bytes served per second, request latency (p50, p99), the
-// sessions' memory on the server.
+// sessions' memory on the server. The same walks served by nginx (HTTP range requests) beside.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +25,9 @@ struct PvsSocketBenchParams {
   std::vector<double> latencies = {1, 80, 350};  // ms, one way, each direction
   std::vector<double> bandwidths = {10, 100};    // Mbit/s, each direction
   std::vector<std::string> prefetchers = {"snp", "pbnp", "speed"};
+  // The same walks with no PVS server: the world file behind Debian's nginx, read by range
+  // requests (each delayed by the link's round trip, its bytes at its rate); none: not run.
+  std::vector<std::string> nginx_prefetchers = {"pbnp"};
   // Many clients on one server: each walks the first path kind from its own starting frame.
   int clients = 64;
   double clients_latency_ms = 80, clients_bandwidth_mbit = 100;  // the server's link to each client

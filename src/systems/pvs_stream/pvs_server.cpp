@@ -2,6 +2,7 @@
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <filesystem>
 #include <map>
@@ -294,6 +295,8 @@ namespace cellwalk::pvs_stream {
 
 // ---- The world file as the source ---------------------------------------------------------
 
+constexpr size_t kReadsInFlight = 6;
+
 struct PvsFileSource::Impl {
   const World& world;
   visibility::StoredPvs pvs;
@@ -327,11 +330,31 @@ PvsReply PvsFileSource::fetch(const FetchRequest& request) {
     fail(m.world.file().path(), e.what());
   }
   reply.rows = std::move(plan.rows);
-  for (uint32_t id : plan.send) {
-    m.check_cancelled();
-    const uint32_t level = std::min(request.level, m.world.object(id).lod_count - 1);
-    reply.objects.push_back({request.sequence, id, level, m.world.read_level(id, level)});
-  }
+  // The objects' reads go out kReadsInFlight at a time, as a browser's connections to one host
+  // do: over a web server each is a round trip of its own.
+  reply.objects.resize(plan.send.size());
+  std::atomic<size_t> next{0};
+  std::string failure;
+  std::mutex failure_mutex;
+  const auto reader = [&] {
+    for (size_t i = next++; i < plan.send.size(); i = next++) {
+      const uint32_t id = plan.send[i];
+      const uint32_t level = std::min(request.level, m.world.object(id).lod_count - 1);
+      try {
+        m.check_cancelled();
+        reply.objects[i] = {request.sequence, id, level, m.world.read_level(id, level)};
+      } catch (const std::exception& e) {
+        const std::lock_guard lock(failure_mutex);
+        if (failure.empty()) failure = e.what();
+        next = plan.send.size();
+      }
+    }
+  };
+  std::vector<std::thread> readers;
+  for (size_t t = 1; t < std::min(kReadsInFlight, plan.send.size()); ++t) readers.emplace_back(reader);
+  reader();
+  for (std::thread& t : readers) t.join();
+  if (!failure.empty()) throw Error(failure);
   reply.bytes = m.world.file().pages().counters().bytes - before;
   return reply;
 }

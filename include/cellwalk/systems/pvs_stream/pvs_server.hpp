@@ -105,8 +105,8 @@ class PvsClient final : public PvsSource {
 // No server: the client answers its own fetches from a world file, keeping the mirror a server
 // would keep, so it reads exactly the rows and the objects a server would send (§7.3's ΔS).
 // With the world opened from a URL this is the walkthrough served by a plain web server (issue
-// 20): every row and object is one or more HTTP range requests. `bytes` of a reply count the
-// pages read for it. REQUIRES: `world` outlives the source.
+// 20): every row and object is one or more HTTP range requests, the objects' six at a time (as a
+// browser's connections to one host). `bytes` of a reply count the pages read for it. REQUIRES: `world` outlives the source.
 class PvsFileSource final : public PvsSource {
  public:
   explicit PvsFileSource(const World& world);
