@@ -88,6 +88,20 @@ TEST(HttpReadSource, AWorldByUrlIsTheWorldFromItsFile) {
   EXPECT_NE(info.output.find("\"objects\": " + std::to_string(local.object_count())), std::string::npos) << info.output;
   const test::CommandResult verify = test::run_cellwalk("verify " + web.url("city.cww"));
   EXPECT_EQ(verify.exit_code, 0) << verify.output;
+  // Any strategy walks it: brute draws the same triangles from the URL as from the file.
+  const test::CommandResult path = test::run_cellwalk("path " + web.url("city.cww") + " --frames 20 -o " + dir.file("p.path"));
+  ASSERT_EQ(path.exit_code, 0) << path.output;
+  const auto triangles = [&](const std::string& world, const std::string& out) {
+    const test::CommandResult r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.path") + " --strategy brute -o " +
+                                                     dir.file(out) + " --json");
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+    const nlohmann::json& run = j.is_array() ? j[0] : j.contains("runs") ? j["runs"][0] : j;
+    return run["total_triangles"].get<uint64_t>();
+  };
+  const uint64_t from_url = triangles(web.url("city.cww"), "url"), from_file = triangles(file, "file");
+  EXPECT_GT(from_url, 0u);
+  EXPECT_EQ(from_url, from_file);
 }
 
 // A file damaged on the server fails its page checksum; one replaced while open is refused as

@@ -1,5 +1,6 @@
 // cellwalk walk: replay a path headless with one strategy or several side by side; per-frame
 // CSV and summary JSON per strategy, and a table comparing them.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 
@@ -38,6 +39,7 @@ WalkSummary walk_one(const ReplayOptions& args, const World& world, const Camera
   summary.gpu_budget_bytes = renderer.settings().gpu_budget_bytes;
   summary.baseline_rss_bytes = baseline;
   summary.peak_rss_bytes = peak_rss_bytes();
+  summary.strategy_counters = strategy->walk_counters();
   const std::string stem = args.out + "/" + label;
   write_frames_csv(frames, stem + ".csv");
   write_summary_json(summary, stem + ".json");
@@ -51,6 +53,12 @@ WalkSummary walk_one(const ReplayOptions& args, const World& world, const Camera
                 summary.total_bytes_read / 1048576.0, summary.peak_resident_bytes / 1048576.0,
                 summary.budget_bytes ? (" (budget " + bench::fixed(summary.budget_bytes / 1048576.0, 1) + " MiB)").c_str() : "",
                 summary.peak_rss_bytes / 1048576.0, summary.baseline_rss_bytes / 1048576.0, stem.c_str(), stem.c_str());
+  if (!args.json && !summary.strategy_counters.empty()) {
+    std::string line = "  " + label + ":";
+    for (const auto& [name, value] : summary.strategy_counters) line += " " + name + " " + bench::fixed(value, value == std::floor(value) ? 0 : 1) + ",";
+    line.back() = '\n';
+    std::fputs(line.c_str(), stdout);
+  }
   return summary;
 }
 

@@ -82,7 +82,9 @@ std::string to_json(const WalkSummary& s) {
       {"gpu_budget_bytes", s.gpu_budget_bytes},
       {"peak_gpu_bytes", s.peak_gpu_bytes},
       {"baseline_rss_bytes", s.baseline_rss_bytes},
-      {"peak_rss_bytes", s.peak_rss_bytes}};
+      {"peak_rss_bytes", s.peak_rss_bytes},
+      {"strategy_counters", nlohmann::ordered_json::object()}};
+  for (const auto& [name, value] : s.strategy_counters) j["strategy_counters"][name] = value;
   return j.dump(2);
 }
 

@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cellwalk/strategy/frame_stats.hpp"
@@ -28,6 +29,7 @@ struct WalkSummary {
   // budget, peak_rss_bytes <= budget_bytes + baseline_rss_bytes is what the budget promises.
   uint64_t baseline_rss_bytes = 0;
   uint64_t peak_rss_bytes = 0;
+  std::vector<std::pair<std::string, double>> strategy_counters;  // Strategy::walk_counters()
 };
 
 WalkSummary summarize(const std::string& strategy, const std::vector<FrameStats>& frames);

@@ -3,6 +3,8 @@
 // walk harness renders and measures every strategy the same way.
 #pragma once
 
+#include <utility>
+
 #include <memory>
 #include <span>
 #include <string>
@@ -53,6 +55,9 @@ class Strategy {
   virtual uint64_t peak_resident_bytes() const = 0;
   // Zero for strategies that run no index queries.
   virtual QueryTotals query_totals() const { return {}; }
+  // The strategy's own counters for a walk's report, name → value (a streaming client's
+  // transactions, bytes received, frames drawn late); none by default.
+  virtual std::vector<std::pair<std::string, double>> walk_counters() const { return {}; }
 };
 
 struct StrategyOptions {

@@ -437,6 +437,22 @@ PvsStreamCounters PvsStreamStrategy::counters() const {
   return impl_->counters;
 }
 
+std::vector<std::pair<std::string, double>> PvsStreamStrategy::walk_counters() const {
+  const PvsStreamCounters c = counters();
+  return {{"stall_frames", double(c.stall_frames)},
+          {"late_frames", double(c.late_frames)},
+          {"startup_ms", c.startup_ms},
+          {"cell_crossings", double(c.cell_crossings)},
+          {"transactions", double(c.transactions)},
+          {"transaction_ms_mean", c.transactions ? c.transaction_ms_sum / double(c.transactions) : 0.0},
+          {"transaction_ms_max", c.transaction_ms_max},
+          {"rows_received", double(c.rows_received)},
+          {"rows_replaced", double(c.cache_swaps)},
+          {"objects_received", double(c.objects_received)},
+          {"objects_dropped", double(c.objects_dropped)},
+          {"bytes_received", double(c.bytes_received)}};
+}
+
 std::vector<double> PvsStreamStrategy::transaction_times_ms() const {
   const std::lock_guard lock(impl_->mutex);
   return impl_->transaction_times;

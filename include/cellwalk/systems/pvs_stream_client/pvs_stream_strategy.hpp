@@ -81,6 +81,8 @@ class PvsStreamStrategy : public Strategy {
   uint64_t resident_bytes() const override;
   uint64_t peak_resident_bytes() const override;
   PvsStreamCounters counters() const;  // thread-safe
+  // The counters above, named, for walk's report (thread-safe).
+  std::vector<std::pair<std::string, double>> walk_counters() const override;
   // Each transaction's time, request sent to reply done, in order (thread-safe).
   std::vector<double> transaction_times_ms() const;
   // The id of the view cell `camera` stands in (its stored set is the row drawn there), if any.
