@@ -22,6 +22,7 @@ void register_pvs(CLI::App& root);
 void register_bench(CLI::App& root);
 void register_visual_build(CLI::App& root);
 void register_stratify(CLI::App& root);
+void register_vdr_build(CLI::App& root);
 // Subcommands of `cellwalk bench`, called by register_bench.
 void register_bench_scene_tree(CLI::App& bench, std::string (*command_line)());
 void register_bench_review(CLI::App& bench, std::string (*command_line)());

@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   cellwalk::app::register_pvs(root);
   cellwalk::app::register_visual_build(root);
   cellwalk::app::register_stratify(root);
+  cellwalk::app::register_vdr_build(root);
   cellwalk::app::register_path(root);
   cellwalk::app::register_walk(root);
   cellwalk::app::register_compare(root);
