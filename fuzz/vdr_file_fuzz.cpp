@@ -23,7 +23,7 @@ namespace {
 using namespace cellwalk;
 
 std::vector<uint8_t> base_file() {
-  const Mesh mesh = ellipsoid(Vec3(1.0f, 2.0f, 1.5f), 12, 8);
+  const Mesh mesh = shapes::ellipsoid(Vec3(1.0f, 2.0f, 1.5f), 12, 8);
   const vdr::ProgressiveMesh pm = vdr::build_progressive_mesh(mesh, {.base_triangles = 8}, "ellipsoid");
   return vdr::encode_vdr(pm, vdr::build_vsplit_dag(pm, vdr::DagKind::kMiniRedundant));
 }
