@@ -50,7 +50,7 @@ struct Op {
   bool split;
 };
 
-// The bytes an op takes in a batch (docs/protocol.md "VDR"): a vsplit carries v_c's position
+// The bytes an op takes in a batch (docs/vdr.md "Limits"): a vsplit carries v_c's position
 // and normal; both carry v_p and the adjusted triangles (an ecol has no hierarchy to find them).
 uint32_t op_wire_bytes(const ProgressiveMesh& pm, const Op& op);
 
