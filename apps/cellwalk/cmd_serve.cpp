@@ -1,16 +1,19 @@
-// cellwalk serve: the PVS streaming server (seed 004, ch. 7 over TCP; docs/protocol.md): one
-// world with visible sets over a grid, many clients, until SIGINT/SIGTERM or --seconds.
+// cellwalk serve: seed 004's servers over TCP (docs/protocol.md), many clients, until SIGINT/SIGTERM
+// or --seconds: a world with visible sets over a grid (PVS streaming, ch. 7) or a VDR model
+// (.cwvdr: view-dependent refinement, ch. 3–6).
 #include <pthread.h>
 #include <signal.h>
 
 #include <cstdio>
 #include <ctime>
+#include <functional>
 #include <memory>
 #include <thread>
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
+#include "cellwalk/systems/vdr/vdr_server.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
 
@@ -19,49 +22,95 @@ namespace {
 
 // Waits for SIGINT or SIGTERM, or the deadline (0: none), then stops the server. The signals
 // are blocked in every thread first, so only this one takes them.
-std::thread stop_on_signal_or_deadline(pvs_stream::PvsServer& server, double seconds) {
+std::thread stop_on_signal_or_deadline(std::function<void()> stop, double seconds) {
   sigset_t set;
   sigemptyset(&set);
   sigaddset(&set, SIGINT);
   sigaddset(&set, SIGTERM);
   pthread_sigmask(SIG_BLOCK, &set, nullptr);
-  return std::thread([&server, set, seconds] {
+  return std::thread([stop, set, seconds] {
     for (double waited = 0; seconds <= 0 || waited < seconds; waited += 0.2) {
       const timespec step{0, 200'000'000};
       if (sigtimedwait(&set, nullptr, &step) > 0) break;
     }
-    server.stop();
+    stop();
   });
+}
+
+bool is_vdr_model(const std::string& path) { return path.size() > 6 && path.ends_with(".cwvdr"); }
+
+struct ServeArgs {
+  std::string input;
+  uint16_t port = 0;
+  net::LinkShape link;
+  double seconds = 0;
+  bool json = false, quiet = false;
+};
+
+std::function<void(const std::string&)> session_log(const ServeArgs& a) {
+  if (a.quiet) return {};
+  return [](const std::string& line) { std::fprintf(stderr, "cellwalk serve: %s\n", line.c_str()); };
+}
+
+void serve_vdr(const ServeArgs& a) {
+  const vdr::VdrModel model = vdr::read_vdr_file(a.input);
+  vdr::VdrServerOptions options;
+  options.port = a.port;
+  options.link = a.link;
+  options.log = session_log(a);
+  vdr::VdrServer server(model, options);
+  std::printf("serving %s (%u base triangles, %u vsplits) on 127.0.0.1:%u\n", a.input.c_str(),
+              model.pm.base_triangle_count, model.pm.vsplit_count(), unsigned(server.port()));
+  std::fflush(stdout);
+  std::thread stopper = stop_on_signal_or_deadline([&server] { server.stop(); }, a.seconds);
+  server.run();
+  stopper.join();
+  const vdr::VdrServerStats s = server.stats();
+  if (a.json) {
+    const nlohmann::ordered_json j = {{"port", server.port()},
+                                      {"sessions", s.sessions_opened},
+                                      {"dropped", s.sessions_dropped},
+                                      {"batches", s.batches},
+                                      {"ops", s.ops},
+                                      {"bytes_sent", s.bytes_sent},
+                                      {"traversal_ms", s.traversal_ms},
+                                      {"peak_session_bytes", s.peak_session_bytes},
+                                      {"model_bytes", s.model_bytes}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("served %llu sessions (%llu dropped), %llu batches, %llu ops, %llu bytes\n", (unsigned long long)s.sessions_opened,
+              (unsigned long long)s.sessions_dropped, (unsigned long long)s.batches, (unsigned long long)s.ops,
+              (unsigned long long)s.bytes_sent);
 }
 
 }  // namespace
 
 void register_serve(CLI::App& root) {
-  auto* cmd = root.add_subcommand("serve", "Serve a world's visible sets and geometry to PVS streaming clients (TCP)");
-  struct Args {
-    std::string world;
-    pvs_stream::PvsServerOptions options;
-    double seconds = 0;
-    bool json = false, quiet = false;
-  };
-  auto a = std::make_shared<Args>();
-  cmd->add_option("world", a->world, "World file (.cww) with visible sets over a grid (`cellwalk pvs --cells grid:S`)")->required();
-  cmd->add_option("--port", a->options.port, "TCP port on 127.0.0.1 (0: a free one, printed)")->capture_default_str()->check(integer_in(0, 65535));
-  cmd->add_option("--latency-ms", a->options.link.latency_ms, "Delay added to every reply (one way)")->capture_default_str()->check(number_in(0, 60000));
-  cmd->add_option("--bandwidth-mbit", a->options.link.bandwidth_mbit, "Rate of the replies in Mbit/s (0: unlimited)")->capture_default_str()->check(number_in(0, 1e6));
+  auto* cmd = root.add_subcommand("serve", "Serve a world to PVS streaming clients, or a VDR model to view-dependent clients (TCP)");
+  auto a = std::make_shared<ServeArgs>();
+  cmd->add_option("input", a->input,
+                  "World file (.cww) with visible sets over a grid (`cellwalk pvs --cells grid:S`), or a VDR model "
+                  "(.cwvdr, `cellwalk vdr-build`)")->required();
+  cmd->add_option("--port", a->port, "TCP port on 127.0.0.1 (0: a free one, printed)")->capture_default_str()->check(integer_in(0, 65535));
+  cmd->add_option("--latency-ms", a->link.latency_ms, "Delay added to every reply (one way)")->capture_default_str()->check(number_in(0, 60000));
+  cmd->add_option("--bandwidth-mbit", a->link.bandwidth_mbit, "Rate of the replies in Mbit/s (0: unlimited)")->capture_default_str()->check(number_in(0, 1e6));
   cmd->add_option("--seconds", a->seconds, "Stop after this many seconds (0: at SIGINT or SIGTERM)")->capture_default_str()->check(number_in(0, 1e9));
   cmd->add_flag("--quiet", a->quiet, "Do not log sessions");
   cmd->add_flag("--json", a->json, "Print the summary as JSON when stopped");
   cmd->callback([a] {
-    const World world(a->world);
-    if (!a->quiet)
-      a->options.log = [](const std::string& line) { std::fprintf(stderr, "cellwalk serve: %s\n", line.c_str()); };
-    pvs_stream::PvsServer server(world, a->options);
+    if (is_vdr_model(a->input)) return serve_vdr(*a);
+    const World world(a->input);
+    pvs_stream::PvsServerOptions options;
+    options.port = a->port;
+    options.link = a->link;
+    options.log = session_log(*a);
+    pvs_stream::PvsServer server(world, options);
     const pvs_stream::Welcome grid = pvs_stream::grid_of(world);
-    std::printf("serving %s (%zu objects, %u × %u cells) on 127.0.0.1:%u\n", a->world.c_str(), world.object_count(),
+    std::printf("serving %s (%zu objects, %u × %u cells) on 127.0.0.1:%u\n", a->input.c_str(), world.object_count(),
                 grid.rows, grid.cols, unsigned(server.port()));
     std::fflush(stdout);
-    std::thread stopper = stop_on_signal_or_deadline(server, a->seconds);
+    std::thread stopper = stop_on_signal_or_deadline([&server] { server.stop(); }, a->seconds);
     server.run();
     stopper.join();
     const pvs_stream::PvsServerStats s = server.stats();

@@ -18,6 +18,7 @@ void register_build(CLI::App& root);
 void register_verify(CLI::App& root);
 void register_db(CLI::App& root);
 void register_serve(CLI::App& root);
+void register_connect(CLI::App& root);
 void register_pvs(CLI::App& root);
 void register_bench(CLI::App& root);
 void register_visual_build(CLI::App& root);

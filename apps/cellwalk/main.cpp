@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   cellwalk::app::register_render(root);
   cellwalk::app::register_view(root);
   cellwalk::app::register_serve(root);
+  cellwalk::app::register_connect(root);
   cellwalk::app::register_bench(root);
   if (const std::string unknown = unknown_subcommand(root, argc, argv); !unknown.empty()) {
     std::fprintf(stderr, "cellwalk: %s\n", unknown.c_str());

@@ -5,23 +5,15 @@
 
 #include "cellwalk/net/frame.hpp"
 #include "core/bytes.hpp"
+#include "net/message_parse.hpp"
 
 namespace cellwalk::pvs_stream {
 namespace {
 
 using net::ProtocolError;
 
-// ByteReader throws Error on a short buffer; the network's error type is ProtocolError.
-template <typename F>
-auto parsing(const char* message, F&& body) {
-  try {
-    return body();
-  } catch (const ProtocolError&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw ProtocolError(std::string("a malformed ") + message + " message: " + e.what());
-  }
-}
+using net::expect_end;
+using net::parsing;
 
 std::vector<uint32_t> get_ids(ByteReader& r, const char* what, uint32_t most, uint32_t below) {
   const uint32_t n = r.get<uint32_t>(what);
@@ -35,10 +27,6 @@ std::vector<uint32_t> get_ids(ByteReader& r, const char* what, uint32_t most, ui
 void put_ids(ByteWriter& w, const std::vector<uint32_t>& ids) {
   w.put(uint32_t(ids.size()));
   w.put_array(std::span<const uint32_t>(ids));
-}
-
-void expect_end(const ByteReader& r, const char* message) {
-  if (r.remaining() != 0) throw ProtocolError(std::string("a ") + message + " message with " + std::to_string(r.remaining()) + " bytes too many");
 }
 
 }  // namespace

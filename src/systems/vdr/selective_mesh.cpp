@@ -2,6 +2,8 @@
 // (digest §3.7).
 #include "cellwalk/systems/vdr/selective_mesh.hpp"
 
+#include <xxhash.h>
+
 #include <algorithm>
 
 #include "cellwalk/core/error.hpp"
@@ -153,6 +155,17 @@ uint64_t SelectiveMesh::aux_bytes() const {
   };
   return map_bytes(vertex_slot_) + map_bytes(triangle_slot_) +
          (triangle_id_.size() + vertex_id_.size() + recycle_.size() + uses_.size()) * sizeof(uint32_t);
+}
+
+uint64_t mesh_digest(const SelectiveMesh& mesh) {
+  XXH3_state_t* state = XXH3_createState();
+  XXH3_64bits_reset(state);
+  XXH3_64bits_update(state, mesh.indices().data(), mesh.indices().size() * sizeof(uint32_t));
+  XXH3_64bits_update(state, mesh.positions().data(), mesh.positions().size() * sizeof(Vec3));
+  XXH3_64bits_update(state, mesh.normals().data(), mesh.normals().size() * sizeof(Vec3));
+  const uint64_t digest = XXH3_64bits_digest(state);
+  XXH3_freeState(state);
+  return digest;
 }
 
 }  // namespace cellwalk::vdr

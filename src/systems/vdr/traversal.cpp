@@ -34,7 +34,7 @@ TraversalKind parse_traversal(const std::string& word) {
 
 uint32_t op_wire_bytes(const ProgressiveMesh& pm, const Op& op) {
   const uint32_t adjusted = 4 * static_cast<uint32_t>(pm.adjusted_of(op.node).size());
-  return op.split ? 42 + adjusted : 10 + adjusted;
+  return op.split ? 43 + adjusted : 11 + adjusted;
 }
 
 // The frame's view cone, prepared once: cos α and sin α for the out-of-view test without trig
@@ -196,8 +196,9 @@ TraversalStats Traversal::manage(const ViewParams& vp, std::vector<Op>& ops, uin
   (constant ? limits.evaluated : limits.ops) = vp.n;
   const uint32_t before = triangles_;
   pass(true, limits);
-  // BUDGET: add no more triangles than the collapses removed.
-  if (vp.mode == BudgetMode::kBudget) limits.triangles = before - triangles_;
+  // BUDGET: add no more triangles than the collapses removed; a budget: no more than reach it.
+  if (vp.budget > 0) limits.triangles = vp.budget > triangles_ ? vp.budget - triangles_ : 0;
+  else if (vp.mode == BudgetMode::kBudget) limits.triangles = before - triangles_;
   pass(false, limits);
   return s;
 }

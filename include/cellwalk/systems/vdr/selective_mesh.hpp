@@ -77,4 +77,14 @@ class SelectiveMesh {
   std::vector<uint32_t> uses_;  // per vertex slot, the triangle corners on it
 };
 
+// The lockstep digest (docs/protocol.md): XXH3 of the index, position and normal arrays as they
+// lie. Two meshes that took the same ops from the same base have the same arrays, slot for slot.
+uint64_t mesh_digest(const SelectiveMesh& mesh);
+
+// The op a batch or the model describes, as SelectiveMesh takes it. `adjusted` is viewed, not copied.
+template <typename OpLike>
+VsplitOp vsplit_op(const OpLike& op) {
+  return VsplitOp{op.node, op.v_p, op.v_l, op.v_r, op.position, op.normal, op.adjusted};
+}
+
 }  // namespace cellwalk::vdr

@@ -42,6 +42,11 @@ struct ViewParams {
   float tau = 0.001f;    // screen-space tolerance, a fraction of the viewport
   BudgetMode mode = BudgetMode::kFree;
   uint32_t n = 500;      // ops per direction per frame (nodes evaluated, for constant-time)
+  // B held by the server (beyond the thesis; docs/vdr.md "The budget"): when non-zero the splits
+  // add no more triangles than leave the cut at B, and `mode` is not read. The cut the server
+  // holds is the mesh the client will have once every batch sent is applied, so the client never
+  // passes B, however many batches are in flight — without the alarm level's 2Nf of headroom.
+  uint32_t budget = 0;
 };
 
 // One op of a batch, in the order the client must apply it.

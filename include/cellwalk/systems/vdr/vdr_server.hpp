@@ -1,0 +1,54 @@
+// The VDR streaming server (seed 004, §4.1, Fig. 5.4, §8.2.1's many users): one model's
+// progressive mesh and vsplit DAG, read-only and shared by every session; per session, the cut
+// (status bit and counter per node, the fronts) and a traversal. Each view request is answered
+// by one batch of at most 64 KB: MANAGE-TRAVERSAL's ecols, then its vsplits. One thread, async
+// (no thread per client); a session that breaks the protocol, stalls mid-message, falls out of
+// lockstep or lets its batches pile up is dropped alone, with a reason (docs/protocol.md).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+#include "cellwalk/net/connection.hpp"
+#include "cellwalk/systems/vdr/vdr_file.hpp"
+#include "cellwalk/systems/vdr/vdr_protocol.hpp"
+
+namespace cellwalk::vdr {
+
+struct VdrServerOptions {
+  uint16_t port = 0;    // 0: a free port
+  std::string address = "127.0.0.1";
+  net::LinkShape link;  // the server → client direction (the thesis held packets on the server)
+  // A view request is 55 bytes and a hello 8: nothing larger is read.
+  net::ConnectionLimits limits{256, size_t(16) << 20, std::chrono::milliseconds(10000)};
+  std::function<void(const std::string&)> log;  // one line per session event; none: silent
+};
+
+struct VdrServerStats {
+  uint64_t sessions_opened = 0, sessions_dropped = 0, batches = 0, ops = 0, bytes_sent = 0;
+  double traversal_ms = 0.0;  // MANAGE-TRAVERSAL and encoding, summed over every batch
+  // What the sessions held at the most, together and the largest one: cut, fronts, shadow mesh
+  // and batches not yet written (the model is shared and counted apart).
+  uint64_t peak_session_bytes = 0, peak_one_session_bytes = 0;
+  uint64_t model_bytes = 0;
+};
+
+class VdrServer {
+ public:
+  // REQUIRES: `model` outlives the server. Throws Error when it cannot listen.
+  VdrServer(const VdrModel& model, VdrServerOptions options);
+  ~VdrServer();
+  uint16_t port() const;
+  // Serves on the calling thread until stop().
+  void run();
+  void stop();                   // thread-safe
+  VdrServerStats stats() const;  // thread-safe
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace cellwalk::vdr

@@ -1,0 +1,113 @@
+// Seed 004 (Zheng), §4.6, §5.5 and §6.4: a client walked along a path and measured against the
+// sequential reference (docs/vdr.md, "Measuring a client").
+#include "cellwalk/systems/vdr/vdr_walk.hpp"
+
+#include <algorithm>
+#include <array>
+#include <thread>
+
+#include "cellwalk/systems/vdr/traversal.hpp"
+#include "core/stopwatch.hpp"
+
+namespace cellwalk::vdr {
+
+struct ReferenceWalk::Impl {
+  const VdrModel& model;
+  VdrClientOptions options;
+  Traversal traversal;
+  SelectiveMesh mesh;
+  std::vector<Op> ops;
+
+  Impl(const VdrModel& m, const Hello& hello, const VdrClientOptions& o)
+      : model(m),
+        options(o),
+        traversal(m, hello.kind, hello.units),
+        mesh(std::span(m.pm.positions).first(m.pm.base_vertex_count), std::span(m.pm.normals).first(m.pm.base_vertex_count),
+             m.pm.base_indices) {}
+};
+
+ReferenceWalk::ReferenceWalk(const VdrModel& model, const Hello& hello, const VdrClientOptions& options)
+    : impl_(std::make_unique<Impl>(model, hello, options)) {}
+ReferenceWalk::~ReferenceWalk() = default;
+
+const SelectiveMesh& ReferenceWalk::step(const Vec3& eye, const Vec3& aim) {
+  Impl& m = *impl_;
+  const int64_t alarm = int64_t(m.options.budget) - 2 * int64_t(m.options.n);
+  const BudgetMode mode = int64_t(m.mesh.triangle_count()) > alarm ? BudgetMode::kBudget : BudgetMode::kFree;
+  m.ops.clear();
+  const uint32_t budget = m.options.server_budget ? m.options.budget : 0;
+  m.traversal.manage({eye, aim, m.options.alpha, m.options.tau, mode, m.options.n, budget}, m.ops, kMaxBatchBytes - kBatchHeaderBytes);
+  for (const Op& op : m.ops) {
+    const WireOp w = wire_op(m.model.pm, op);
+    op.split ? m.mesh.vsplit(vsplit_op(w)) : m.mesh.ecol(vsplit_op(w));
+  }
+  return m.mesh;
+}
+
+namespace {
+std::vector<std::array<uint32_t, 3>> canonical_triangles(const SelectiveMesh& mesh) {
+  std::vector<std::array<uint32_t, 3>> ts = mesh.triangles_by_id();
+  for (auto& t : ts) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+  std::sort(ts.begin(), ts.end());
+  return ts;
+}
+}  // namespace
+
+double triangle_accuracy(const SelectiveMesh& mesh, const SelectiveMesh& reference) {
+  const auto got = canonical_triangles(mesh), want = canonical_triangles(reference);
+  if (want.empty()) return 1.0;
+  size_t common = 0;
+  for (size_t i = 0, j = 0; i < got.size() && j < want.size();) {
+    if (got[i] < want[j]) ++i;
+    else if (want[j] < got[i]) ++j;
+    else ++common, ++i, ++j;
+  }
+  return double(common) / double(want.size());
+}
+
+double quantile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(q * double(v.size())))];
+}
+
+VdrWalkResult walk_vdr(VdrClient& client, const VdrClientOptions& options, const std::vector<VdrFrame>& path,
+                       const VdrWalkOptions& walk) {
+  std::unique_ptr<ReferenceWalk> reference;
+  if (walk.reference) reference = std::make_unique<ReferenceWalk>(*walk.reference, options.hello, options);
+  VdrWalkResult out;
+  double accuracy_sum = 0;
+  uint32_t samples = 0;
+  for (size_t i = 0; i < path.size(); ++i) {
+    const Stopwatch frame;
+    VdrWalkFrame f;
+    f.report = client.frame(path[i].eye, path[i].aim);
+    f.render_ms = walk.render ? walk.render(client.mesh()) : 0.0;
+    const double work = frame.ms();
+    if (reference) {  // not the client's work: outside the frame's time
+      const SelectiveMesh& ref = reference->step(path[i].eye, path[i].aim);
+      if (i % walk.accuracy_every == 0) f.accuracy = triangle_accuracy(client.mesh(), ref), accuracy_sum += f.accuracy, ++samples;
+    }
+    const double idle = std::max(0.0, walk.frame_ms - work);
+    if (idle > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(idle));
+    f.frame_ms = work + idle;
+    client.rendered(f.render_ms + idle);  // a paced client's T_r includes its wait for the display
+    out.frames.push_back(f);
+  }
+  out.stats = client.stats();
+  const double n = std::max<double>(1, out.frames.size());
+  for (const VdrWalkFrame& f : out.frames) {
+    out.mean_frame_ms += f.frame_ms / n;
+    out.mean_update_ms += f.report.update_ms / n;
+    out.mean_render_ms += f.render_ms / n;
+    out.mean_triangles += f.report.triangles / n;
+    out.mean_ops += f.report.ops / n;
+    out.unmodified_share += (f.report.modified ? 0.0 : 1.0) / n;
+  }
+  if (samples > 0) out.mean_accuracy = accuracy_sum / samples;
+  out.batch_p50_ms = quantile(out.stats.batch_ms, 0.50);
+  out.batch_p99_ms = quantile(out.stats.batch_ms, 0.99);
+  return out;
+}
+
+}  // namespace cellwalk::vdr

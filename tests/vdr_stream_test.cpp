@@ -1,0 +1,341 @@
+// Seed 004 (Zheng) over TCP: the VDR protocol's messages round-trip and refuse damage; a client
+// walking the thesis's paths stays in lockstep with the server's shadow mesh under delay, late
+// batches and span changes, and under the budget; hostile sessions are dropped alone; many
+// clients at once each get what they would get alone.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <mutex>
+#include <thread>
+
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/net/frame.hpp"
+#include "cellwalk/scene/import.hpp"
+#include "cellwalk/systems/vdr/vdr_client.hpp"
+#include "cellwalk/systems/vdr/vdr_paths.hpp"
+#include "cellwalk/systems/vdr/vdr_server.hpp"
+#include "test_support.hpp"
+
+namespace cellwalk::vdr {
+namespace {
+
+namespace asio = boost::asio;
+using asio::ip::tcp;
+
+const VdrModel& stream_bunny() {
+  static const VdrModel m = [] {
+    VdrModel out;
+    out.pm = build_progressive_mesh(import_model(test::cgal_mesh("bunny00.off"))[0].mesh, {.base_triangles = 200}, "bunny");
+    out.dag = build_vsplit_dag(out.pm, DagKind::kMiniRedundant);
+    for (const Vec3& p : out.pm.positions) out.bounds.extend(p);
+    return out;
+  }();
+  return m;
+}
+
+std::vector<WireOp> stream_ops(const VdrModel& m) {
+  Traversal t(m, TraversalKind::kPriority, ErrorUnits::kLength);
+  const std::vector<VdrFrame> path = thesis_path(1, m.bounds);
+  std::vector<Op> ops;
+  t.manage({path[100].eye, path[100].aim, 0.55f, 0.001f, BudgetMode::kFree, 60}, ops);
+  t.manage({path[0].eye, path[0].aim, 0.55f, 0.001f, BudgetMode::kFree, 20}, ops);  // some ecols
+  std::vector<WireOp> wire;
+  for (const Op& op : ops) wire.push_back(wire_op(m.pm, op));
+  return wire;
+}
+
+// Every message parses back to what was encoded, and a batch is as long as op_wire_bytes says.
+TEST(VdrProtocol, MessagesRoundTrip) {
+  const VdrModel& m = stream_bunny();
+  const Hello h = parse_hello(encode_hello({TraversalKind::kConstant, ErrorUnits::kLength, true}));
+  EXPECT_EQ(h.kind, TraversalKind::kConstant);
+  EXPECT_EQ(h.units, ErrorUnits::kLength);
+  EXPECT_TRUE(h.lockstep);
+  ViewRequest v{7, {{1, 2, 3}, {4, 5, 6}, 0.5f, 0.002f, BudgetMode::kBudget, 321, 40000}, 5, 0x1234567890ABCDEFull};
+  const std::vector<uint8_t> view = encode_view(v);
+  EXPECT_EQ(view.size(), 55u);
+  const ViewRequest back = parse_view(view);
+  EXPECT_EQ(back.sequence, 7u);
+  EXPECT_EQ(back.view.aim, Vec3(4, 5, 6));
+  EXPECT_EQ(back.view.mode, BudgetMode::kBudget);
+  EXPECT_EQ(back.view.n, 321u);
+  EXPECT_EQ(back.view.budget, 40000u);
+  EXPECT_EQ(back.digest, v.digest);
+  const std::vector<WireOp> ops = stream_ops(m);
+  ASSERT_GT(ops.size(), 40u);
+  uint32_t expected = kBatchHeaderBytes;
+  for (const WireOp& op : ops) expected += op_wire_bytes(m.pm, {op.node, op.split});
+  const std::vector<uint8_t> batch = encode_batch(3, 999, ops);
+  EXPECT_EQ(batch.size(), expected);
+  const Batch b = parse_batch(batch, m.pm.vsplit_count());
+  ASSERT_EQ(b.ops.size(), ops.size());
+  for (size_t k = 0; k < ops.size(); ++k) {
+    EXPECT_EQ(b.ops[k].node, ops[k].node);
+    EXPECT_EQ(b.ops[k].split, ops[k].split);
+    EXPECT_EQ(b.ops[k].adjusted, ops[k].adjusted);
+    if (ops[k].split) {
+      EXPECT_EQ(b.ops[k].position, ops[k].position);
+      EXPECT_EQ(b.ops[k].v_r, ops[k].v_r);
+    }
+  }
+  VdrWelcome w;
+  w.vsplits = m.pm.vsplit_count();
+  w.bounds = m.bounds;
+  w.positions.assign(m.pm.positions.begin(), m.pm.positions.begin() + m.pm.base_vertex_count);
+  w.normals.assign(m.pm.normals.begin(), m.pm.normals.begin() + m.pm.base_vertex_count);
+  w.indices = m.pm.base_indices;
+  EXPECT_EQ(encode_welcome(parse_welcome(encode_welcome(w))), encode_welcome(w));
+  EXPECT_EQ(parse_error(encode_error("why")), "why");
+}
+
+// Every strict prefix of every message and every bad value is a ProtocolError, never a crash.
+TEST(VdrProtocol, DamagedMessagesAreRefused) {
+  const VdrModel& m = stream_bunny();
+  const uint32_t n = m.pm.vsplit_count();
+  const std::vector<uint8_t> batch = encode_batch(0, 1, stream_ops(m));
+  const std::vector<uint8_t> view = encode_view({0, {{0, 0, 5}, {0, 0, 0}, 0.5f, 0.001f, BudgetMode::kFree, 500}, kNoBatch, 0});
+  const std::vector<uint8_t> hello = encode_hello({});
+  for (size_t k = 0; k < batch.size(); k += 7) {
+    EXPECT_THROW(parse_batch(std::span(batch).first(k), n), net::ProtocolError) << k;
+  }
+  for (size_t k = 0; k < view.size(); ++k) {
+    EXPECT_THROW(parse_view(std::span(view).first(k)), net::ProtocolError) << k;
+  }
+  for (size_t k = 0; k < hello.size(); ++k) {
+    EXPECT_THROW(parse_hello(std::span(hello).first(k)), net::ProtocolError) << k;
+  }
+  const auto bad_view = [](ViewParams p) { return encode_view({0, p, kNoBatch, 0}); };
+  const ViewParams good{{0, 0, 5}, {0, 0, 0}, 0.5f, 0.001f, BudgetMode::kFree, 500};
+  ViewParams p = good;
+  p.eye.x = std::nanf("");
+  EXPECT_THROW(parse_view(bad_view(p)), net::ProtocolError);
+  p = good, p.alpha = 4.0f;
+  EXPECT_THROW(parse_view(bad_view(p)), net::ProtocolError);
+  p = good, p.tau = 0.0f;
+  EXPECT_THROW(parse_view(bad_view(p)), net::ProtocolError);
+  p = good, p.eye = p.aim;
+  EXPECT_THROW(parse_view(bad_view(p)), net::ProtocolError);
+  std::vector<uint8_t> mode = bad_view(good);
+  mode[36] = 2;  // the mode byte
+  EXPECT_THROW(parse_view(mode), net::ProtocolError);
+  std::vector<uint8_t> kind = batch;
+  kind[kBatchHeaderBytes] = 2;
+  EXPECT_THROW(parse_batch(kind, n), net::ProtocolError);
+  EXPECT_THROW(parse_batch(batch, 3), net::ProtocolError);  // a node past the model
+  std::vector<uint8_t> version = hello;
+  version[0] = 9;
+  EXPECT_THROW(parse_hello(version), net::ProtocolError);
+  EXPECT_NO_THROW(parse_batch(batch, n));
+  EXPECT_NO_THROW(parse_view(view));
+}
+
+// A server on its own thread, logging.
+class VdrServerTest : public ::testing::Test {
+ protected:
+  void start(VdrServerOptions options) {
+    options.log = [this](const std::string& line) {
+      const std::lock_guard lock(log_mutex_);
+      log_.push_back(line);
+    };
+    server_ = std::make_unique<VdrServer>(stream_bunny(), options);
+    thread_ = std::thread([this] { server_->run(); });
+  }
+  void TearDown() override {
+    if (!server_) return;
+    server_->stop();
+    thread_.join();
+  }
+  std::vector<std::string> log() {
+    const std::lock_guard lock(log_mutex_);
+    return log_;
+  }
+  std::unique_ptr<VdrServer> server_;
+  std::thread thread_;
+  std::mutex log_mutex_;
+  std::vector<std::string> log_;
+};
+
+struct StreamWalk {
+  uint64_t digest = 0;
+  uint32_t most_triangles = 0;
+  VdrClientStats stats;
+};
+
+// Walks a thesis path; `frame_ms` paces the frames as a renderer would.
+StreamWalk stream_walk(uint16_t port, int path, VdrClientOptions options, double frame_ms, uint32_t frames = 1000) {
+  VdrClient client("127.0.0.1", port, options);
+  StreamWalk out;
+  uint32_t k = 0;
+  for (const VdrFrame& f : thesis_path(path, stream_bunny().bounds)) {
+    if (k++ == frames) break;
+    const VdrFrameReport r = client.frame(f.eye, f.aim);
+    out.most_triangles = std::max(out.most_triangles, r.triangles);
+    if (frame_ms > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(frame_ms));
+    client.rendered(frame_ms);
+  }
+  out.digest = mesh_digest(client.mesh());
+  out.stats = client.stats();
+  return out;
+}
+
+// Lockstep (the server checks the client's digest of its mesh against its shadow after every
+// batch) along both paths, with 15 ms each way, frames faster than the round trip (late batches,
+// unmodified frames) and the span adapting to it; the mesh stays under B whether the server holds
+// the budget (path 1) or the client's alarm level does (path 2).
+TEST_F(VdrServerTest, ClientStaysInLockstepUnderDelayLateBatchesAndSpanChanges) {
+  VdrServerOptions so;
+  so.link.latency_ms = 15;
+  start(so);
+  for (int path : {1, 2}) {
+    SCOPED_TRACE("path " + std::to_string(path));
+    VdrClientOptions o;
+    o.outgoing.latency_ms = 15;
+    o.hello = {TraversalKind::kPriority, ErrorUnits::kLength, true};
+    o.budget = 12000;
+    o.n = 300;
+    o.adaptive_span = true;
+    o.span = 1;
+    o.server_budget = path == 1;
+    const StreamWalk r = stream_walk(server_->port(), path, o, 4.0);
+    EXPECT_LE(r.most_triangles, o.budget);
+    EXPECT_GT(r.most_triangles, o.budget / 2);
+    EXPECT_GE(r.stats.largest_span, 4u);  // the span rose from 1 with T_g ≈ 30 ms over 4 ms frames
+    EXPECT_GT(r.stats.unmodified, 0u);
+    EXPECT_GT(r.stats.ops, 5000u);
+  }
+  EXPECT_EQ(server_->stats().sessions_dropped, 0u);
+  EXPECT_GT(server_->stats().batches, 300u);
+}
+
+// The server's lockstep check can fail: a client whose digest is not the shadow's is dropped.
+TEST_F(VdrServerTest, ADigestThatDiffersFromTheShadowDropsTheSession) {
+  start({});
+  asio::io_context io;
+  tcp::socket s(io);
+  s.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), server_->port()));
+  const auto send = [&](VdrMessage type, const std::vector<uint8_t>& payload) {
+    asio::write(s, asio::buffer(net::make_frame(uint8_t(type), payload)));
+  };
+  const auto receive = [&] {
+    std::array<uint8_t, net::kFrameHeaderBytes> h{};
+    asio::read(s, asio::buffer(h));
+    const net::FrameHeader header = net::parse_frame_header(h, 1u << 30);
+    std::vector<uint8_t> payload(header.length);
+    asio::read(s, asio::buffer(payload));
+    return std::make_pair(VdrMessage(header.type), payload);
+  };
+  send(VdrMessage::hello, encode_hello({TraversalKind::kPriority, ErrorUnits::kLength, true}));
+  const VdrWelcome w = parse_welcome(receive().second);
+  SelectiveMesh mesh(w.positions, w.normals, w.indices);
+  const VdrFrame f = thesis_path(1, w.bounds)[100];
+  send(VdrMessage::view, encode_view({0, {f.eye, f.aim, 0.55f, 0.001f, BudgetMode::kFree, 100}, kNoBatch, 0}));
+  const Batch b = parse_batch(receive().second, w.vsplits);
+  ASSERT_GT(b.ops.size(), 10u);
+  for (const WireOp& op : b.ops) op.split ? mesh.vsplit(vsplit_op(op)) : mesh.ecol(vsplit_op(op));
+  // The right digest is taken; then the same batch reported with one op left out is not.
+  send(VdrMessage::view, encode_view({1, {f.eye, f.aim, 0.55f, 0.001f, BudgetMode::kFree, 100}, 0, mesh_digest(mesh)}));
+  EXPECT_EQ(receive().first, VdrMessage::batch);
+  SelectiveMesh short_one(w.positions, w.normals, w.indices);
+  for (size_t k = 0; k + 1 < b.ops.size(); ++k) short_one.vsplit(vsplit_op(b.ops[k]));
+  send(VdrMessage::view, encode_view({2, {f.eye, f.aim, 0.55f, 0.001f, BudgetMode::kFree, 100}, 0, mesh_digest(short_one)}));
+  const auto [type, payload] = receive();
+  ASSERT_EQ(type, VdrMessage::error);
+  EXPECT_NE(parse_error(payload).find("lockstep lost"), std::string::npos) << parse_error(payload);
+  std::vector<uint8_t> sink(256);
+  boost::system::error_code ec;
+  while (!ec) s.read_some(asio::buffer(sink), ec);  // the server closes the session
+  for (int k = 0; k < 200 && server_->stats().sessions_dropped == 0; ++k) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  EXPECT_EQ(server_->stats().sessions_dropped, 1u);
+}
+
+// Hostile peers — garbage, a 4 GiB length, a truncated view, a view before hello, a request out
+// of sequence, a header then silence, a disconnect mid-message — are each dropped with a logged
+// reason while clients beside them walk on: each good client's mesh is the one it gets alone.
+TEST_F(VdrServerTest, HostileSessionsAreDroppedAloneAndOthersAreServedAsIfAlone) {
+  VdrServerOptions so;
+  so.limits.stall = std::chrono::milliseconds(300);
+  start(so);
+  VdrClientOptions o;
+  o.hello = {TraversalKind::kLinear, ErrorUnits::kLength, true};
+  o.budget = 15000;
+  o.sequential = true;  // deterministic: each batch answers the true view
+  const uint64_t alone1 = stream_walk(server_->port(), 1, o, 0, 120).digest, alone2 = stream_walk(server_->port(), 2, o, 0, 120).digest;
+  ASSERT_NE(alone1, alone2);
+
+  const std::vector<uint8_t> hello = net::make_frame(uint8_t(VdrMessage::hello), encode_hello({}));
+  const auto after_hello = [&](const std::vector<uint8_t>& more) {
+    std::vector<uint8_t> out = hello;
+    out.insert(out.end(), more.begin(), more.end());
+    return out;
+  };
+  const ViewRequest view{0, {{0, 0, 1}, {0, 0, 0}, 0.5f, 0.001f, BudgetMode::kFree, 500}, kNoBatch, 0};
+  std::vector<uint8_t> truncated = encode_view(view);
+  truncated.resize(20);
+  ViewRequest late = view;
+  late.sequence = 5;
+  std::vector<uint8_t> huge = hello;
+  huge[8] = huge[9] = huge[10] = huge[11] = 0xFF;
+  std::vector<uint8_t> stalled = hello;
+  stalled.resize(net::kFrameHeaderBytes + 2);
+  const std::vector<std::pair<std::string, std::vector<uint8_t>>> cases = {
+      {"bad magic", std::vector<uint8_t>(40, 'z')},
+      {"more than the", huge},
+      {"malformed view", after_hello(net::make_frame(uint8_t(VdrMessage::view), truncated))},
+      {"first message must be hello", net::make_frame(uint8_t(VdrMessage::view), encode_view(view))},
+      {"where 0 was due", after_hello(net::make_frame(uint8_t(VdrMessage::view), encode_view(late)))},
+      {"stalled", stalled}};
+  asio::io_context io;
+  std::vector<tcp::socket> sockets;
+  for (const auto& c : cases) {
+    sockets.emplace_back(io);
+    sockets.back().connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), server_->port()));
+    asio::write(sockets.back(), asio::buffer(c.second));
+  }
+  {  // a disconnect in the middle of a message
+    tcp::socket s(io);
+    s.connect(tcp::endpoint(asio::ip::make_address("127.0.0.1"), server_->port()));
+    std::vector<uint8_t> half = after_hello(net::make_frame(uint8_t(VdrMessage::view), encode_view(view)));
+    half.resize(half.size() - 10);
+    asio::write(s, asio::buffer(half));
+  }
+  uint64_t digests[4] = {};
+  std::vector<std::thread> good;
+  for (int k = 0; k < 4; ++k) good.emplace_back([&, k] { digests[k] = stream_walk(server_->port(), 1 + k % 2, o, 0, 120).digest; });
+  for (tcp::socket& s : sockets) {
+    std::vector<uint8_t> sink(1 << 16);
+    boost::system::error_code ec;
+    while (!ec) s.read_some(asio::buffer(sink), ec);
+  }
+  for (std::thread& t : good) t.join();
+  for (int k = 0; k < 4; ++k) EXPECT_EQ(digests[k], k % 2 == 0 ? alone1 : alone2) << "client " << k;
+  for (int k = 0; k < 200 && server_->stats().sessions_dropped < cases.size() + 1; ++k)
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  const std::vector<std::string> lines = log();
+  for (const auto& c : cases) {
+    const std::string& reason = c.first;
+    EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [&](const std::string& l) {
+      return l.find("dropped") != std::string::npos && l.find(reason) != std::string::npos;
+    })) << reason;
+  }
+  EXPECT_TRUE(std::any_of(lines.begin(), lines.end(), [](const std::string& l) { return l.find("mid-message") != std::string::npos; }));
+  EXPECT_EQ(server_->stats().sessions_dropped, cases.size() + 1);
+  EXPECT_GT(server_->stats().peak_one_session_bytes, 0u);
+}
+
+// A client told by the server why it was dropped says so; no server: one line saying what to run.
+TEST_F(VdrServerTest, ClientErrorsNameTheCause) {
+  start({});
+  const uint16_t port = server_->port();
+  server_->stop();
+  thread_.join();
+  server_.reset();
+  try {
+    VdrClient c("127.0.0.1", port, {});
+    FAIL() << "connected to a stopped server";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("cellwalk serve"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace cellwalk::vdr
