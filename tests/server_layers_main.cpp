@@ -1,5 +1,5 @@
 // A program linked only with the layers a streaming server needs (core, scene, lod, store,
-// index, visibility, net, and the PVS streaming server): no OpenGL, no Embree. The build fails to link it if any of those layers
+// index, visibility, net, the PVS streaming server and the VDR server): no OpenGL, no Embree. The build fails to link it if any of those layers
 // comes to need the renderer or the precompute; tests/CMakeLists.txt also checks its dynamic
 // libraries. It reads what a server would serve: a world's objects and, if stored, its sets.
 #include <cstdio>
@@ -8,12 +8,23 @@
 #include "cellwalk/index/rtree.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
+#include "cellwalk/systems/vdr/vdr_server.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 
 int main(int argc, char** argv) {
   using namespace cellwalk;
-  if (argc != 2) {
-    std::fprintf(stderr, "usage: %s WORLD.cww\n", argv[0]);
+  if (argc == 3) {  // a VDR model: served without OpenGL too
+    try {
+      const vdr::VdrModel model = vdr::read_vdr_file(argv[2]);
+      const vdr::VdrServer server(model, {});
+      std::printf("vdr server: listening on port %u\n", unsigned(server.port()));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s\n", e.what());
+      return 1;
+    }
+  }
+  if (argc != 2 && argc != 3) {
+    std::fprintf(stderr, "usage: %s WORLD.cww [MODEL.cwvdr]\n", argv[0]);
     return 2;
   }
   try {

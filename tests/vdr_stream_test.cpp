@@ -337,5 +337,30 @@ TEST_F(VdrServerTest, ClientErrorsNameTheCause) {
   }
 }
 
+// The commands: connect walks a served model and measures it against the model file; serve
+// serves a .cwvdr for a while; bad addresses and mismatched models are one line each.
+TEST_F(VdrServerTest, ConnectAndServeCommands) {
+  start({});
+  const test::TempDir dir;
+  const VdrModel& m = stream_bunny();
+  write_vdr_file(dir.file("bunny.cwvdr"), m.pm, m.dag);
+  const std::string address = "127.0.0.1:" + std::to_string(server_->port());
+  const test::CommandResult r = test::run_cellwalk("connect " + address + " --model " + dir.file("bunny.cwvdr") +
+                                                   " --frame-ms 0 --sequential --lockstep --budget 15000 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("\"accuracy\": 1.0"), std::string::npos) << r.output;  // sequential = the reference
+  EXPECT_NE(r.output.find("\"frames\": 180"), std::string::npos) << r.output;
+  for (const std::string& bad : std::vector<std::string>{"connect nowhere --frame-ms 0", "connect 127.0.0.1:0 --frame-ms 0",
+                                 "connect " + address + " --span 0", "connect " + address + " --predictor magic"}) {
+    const test::CommandResult b = test::run_cellwalk(bad);
+    EXPECT_NE(b.exit_code, 0) << bad;
+    EXPECT_EQ(std::count(b.output.begin(), b.output.end(), '\n'), 1) << bad << ": " << b.output;
+  }
+  const test::CommandResult s = test::run_cellwalk("serve " + dir.file("bunny.cwvdr") + " --seconds 0.5 --json --quiet");
+  ASSERT_EQ(s.exit_code, 0) << s.output;
+  EXPECT_NE(s.output.find("\"sessions\": 0"), std::string::npos) << s.output;
+  EXPECT_EQ(server_->stats().sessions_dropped, 0u);
+}
+
 }  // namespace
 }  // namespace cellwalk::vdr

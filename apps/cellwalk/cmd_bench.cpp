@@ -85,6 +85,7 @@ void register_bench(CLI::App& root) {
   register_bench_vlod(*bench, command_line);
   register_bench_stratified(*bench, command_line);
   register_bench_lichiang(*bench, command_line);
+  register_bench_vdr(*bench, command_line);
   register_bench_disk_order(*bench, command_line);
   register_bench_pvs_stream(*bench, command_line);
 }

@@ -34,5 +34,6 @@ void register_bench_disk_order(CLI::App& bench, std::string (*command_line)());
 void register_bench_pvs_stream(CLI::App& bench, std::string (*command_line)());
 void register_bench_stratified(CLI::App& bench, std::string (*command_line)());
 void register_bench_lichiang(CLI::App& bench, std::string (*command_line)());
+void register_bench_vdr(CLI::App& bench, std::string (*command_line)());
 
 }  // namespace cellwalk::app

@@ -7,6 +7,7 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <time.h>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/systems/vdr/selective_mesh.hpp"
@@ -184,7 +185,17 @@ VdrServer::~VdrServer() = default;
 
 uint16_t VdrServer::port() const { return impl_->listener.port(); }
 
-void VdrServer::run() { impl_->io.run(); }
+void VdrServer::run() {
+  const auto thread_cpu_ms = [] {
+    timespec t{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+    return double(t.tv_sec) * 1e3 + double(t.tv_nsec) / 1e6;
+  };
+  const double start = thread_cpu_ms();
+  impl_->io.run();
+  const std::lock_guard lock(impl_->stats_mutex);
+  impl_->stats.cpu_ms += thread_cpu_ms() - start;
+}
 
 void VdrServer::stop() {
   asio::post(impl_->io, [this] {

@@ -82,7 +82,7 @@ VdrWalkResult walk_vdr(VdrClient& client, const VdrClientOptions& options, const
     const Stopwatch frame;
     VdrWalkFrame f;
     f.report = client.frame(path[i].eye, path[i].aim);
-    f.render_ms = walk.render ? walk.render(client.mesh()) : 0.0;
+    f.render_ms = walk.render ? walk.render(client.mesh(), path[i]) : 0.0;
     const double work = frame.ms();
     if (reference) {  // not the client's work: outside the frame's time
       const SelectiveMesh& ref = reference->step(path[i].eye, path[i].aim);

@@ -29,6 +29,7 @@ struct VdrServerOptions {
 struct VdrServerStats {
   uint64_t sessions_opened = 0, sessions_dropped = 0, batches = 0, ops = 0, bytes_sent = 0;
   double traversal_ms = 0.0;  // MANAGE-TRAVERSAL and encoding, summed over every batch
+  double cpu_ms = 0.0;        // the serving thread's CPU time, once run() has returned
   // What the sessions held at the most, together and the largest one: cut, fronts, shadow mesh
   // and batches not yet written (the model is shared and counted apart).
   uint64_t peak_session_bytes = 0, peak_one_session_bytes = 0;

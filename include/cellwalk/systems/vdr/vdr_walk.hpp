@@ -36,8 +36,8 @@ double triangle_accuracy(const SelectiveMesh& mesh, const SelectiveMesh& referen
 struct VdrWalkOptions {
   // Each frame lasts at least this (a client with a display paces its frames); 0: no pacing.
   double frame_ms = 0.0;
-  // Draws the mesh and returns T_r, ms; none: T_r = 0.
-  std::function<double(const SelectiveMesh&)> render;
+  // Draws the mesh from the frame's true view and returns T_r, ms; none: T_r = 0.
+  std::function<double(const SelectiveMesh&, const VdrFrame&)> render;
   const VdrModel* reference = nullptr;  // for accuracy; none: not measured
   uint32_t accuracy_every = 5;          // the thesis sampled every 5 frames
 };
