@@ -47,7 +47,7 @@ Mesh bumpy_sphere(uint64_t triangles) {
   const int rings = std::max(8, int(std::sqrt(double(triangles) / 4)));
   Mesh m = shapes::ellipsoid(Vec3(1.0f), 2 * rings, rings);
   for (Vec3& p : m.positions) {
-    const Vec3 d = glm::normalize(p);
+    const Vec3 d = glm::normalize(p - Vec3(0, 1, 0));  // the ellipsoid stands on y = 0
     const float bump = 0.05f * std::sin(9 * d.x) * std::sin(7 * d.y) + 0.02f * std::sin(31 * d.z + 3 * d.x) +
                        0.006f * std::sin(97 * d.y) * std::cos(83 * d.x);
     p = d * (1.0f + bump);

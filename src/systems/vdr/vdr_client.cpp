@@ -163,16 +163,26 @@ struct VdrClient::Impl {
     try {
       for (const WireOp& op : b.ops) op.split ? mesh->vsplit(vsplit_op(op)) : mesh->ecol(vsplit_op(op));
     } catch (const std::exception& e) {
-      failed("batch " + std::to_string(b.sequence) + " does not apply: " + e.what());
+      broken("batch " + std::to_string(b.sequence) + " does not apply: " + e.what());
     }
     if (mesh->triangle_count() != b.triangles)
-      failed("out of step after batch " + std::to_string(b.sequence) + ": " + std::to_string(mesh->triangle_count()) +
+      broken("out of step after batch " + std::to_string(b.sequence) + ": " + std::to_string(mesh->triangle_count()) +
              " triangles here, " + std::to_string(b.triangles) + " on the server");
     applied = b.sequence;
     ++next_apply;
+    update_ms = watch.ms();  // T_u: the ops; the lockstep digest is a check, not the client's work
     if (options.hello.lockstep) digest = mesh_digest(*mesh);
-    update_ms = watch.ms();
     return uint32_t(b.ops.size());
+  }
+
+  // A mesh out of step with its server stays unusable: every later frame says why.
+  [[noreturn]] void broken(const std::string& why) {
+    {
+      const std::lock_guard lock(mutex);
+      failure = why;
+      arrived.clear();
+    }
+    failed(why);
   }
 
   // Eq. 6.3.1 every kSpanPeriod frames: f = ⌈T_g / (T_u + T_r)⌉.
@@ -187,8 +197,17 @@ struct VdrClient::Impl {
     span = std::clamp(uint32_t(std::ceil(tg / frame_ms_smoothed)), 1u, options.max_span);
   }
 
+  // Closes the connection and ends GET-UPDATES.
+  void shut_down() {
+    asio::post(io, [this] {
+      connection->close("the client closed");
+      io.stop();
+    });
+    if (get_updates.joinable()) get_updates.join();
+  }
+
   BudgetMode mode_now() const {
-    const int64_t alarm = int64_t(options.budget) - 2 * int64_t(options.n) * span;
+    const int64_t alarm = int64_t(options.budget) - 2 * int64_t(options.n) * (options.sequential ? 1 : span);
     return int64_t(mesh->triangle_count()) > alarm ? BudgetMode::kBudget : BudgetMode::kFree;
   }
 };
@@ -196,6 +215,7 @@ struct VdrClient::Impl {
 VdrClient::VdrClient(const std::string& host, uint16_t port, VdrClientOptions options) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.options = options;
+  if (options.n == 0 || options.n > 0xFFFF) fail("N = " + std::to_string(options.n), "ops per frame must be 1-65,535 (the request's 16 bits)");
   m.span = std::clamp(options.span, 1u, options.max_span);
   m.where = host + ":" + std::to_string(port);
   boost::system::error_code ec;
@@ -217,6 +237,7 @@ VdrClient::VdrClient(const std::string& host, uint16_t port, VdrClientOptions op
   if (!m.welcome) {
     const std::string why = m.failure.empty() ? "no welcome within the timeout" : m.failure;
     lock.unlock();
+    m.shut_down();  // the destructor does not run for a constructor that throws
     m.failed(why);
   }
   // The hello's round trip is the first T_g the span rule sees (Eq. 6.3.1 at frame 1).
@@ -225,17 +246,14 @@ VdrClient::VdrClient(const std::string& host, uint16_t port, VdrClientOptions op
   m.mesh.emplace(w.positions, w.normals, w.indices);
 }
 
-VdrClient::~VdrClient() {
-  Impl& m = *impl_;
-  asio::post(m.io, [&m] {
-    m.connection->close("the client closed");
-    m.io.stop();
-  });
-  if (m.get_updates.joinable()) m.get_updates.join();
-}
+VdrClient::~VdrClient() { impl_->shut_down(); }
 
 VdrFrameReport VdrClient::frame(const Vec3& eye, const Vec3& aim) {
   Impl& m = *impl_;
+  {
+    const std::lock_guard lock(m.mutex);
+    if (!m.failure.empty() && m.arrived.empty()) m.failed(m.failure);
+  }
   VdrFrameReport r;
   m.eye_pp = m.frame_index <= 1 ? (m.frame_index == 0 ? eye : m.eye_c) : m.eye_p;
   m.aim_pp = m.frame_index <= 1 ? (m.frame_index == 0 ? aim : m.aim_c) : m.aim_p;

@@ -23,7 +23,7 @@
 
 namespace cellwalk::vdr {
 
-// What a batch carries for one op (docs/vdr.md; the wire format is next). An ecol carries v_p and the
+// What a batch carries for one op (docs/protocol.md, "VDR streaming"). An ecol carries v_p and the
 // adjusted triangles too: the client keeps no hierarchy to look them up (digest §3.7).
 struct VsplitOp {
   uint32_t node = 0;  // vsplit id i: v_c, f_l and f_r follow from it
