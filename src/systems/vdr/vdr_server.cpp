@@ -90,7 +90,10 @@ struct VdrServer::Impl {
   void closed(uint64_t id, const std::string& reason) {
     const auto it = sessions.find(id);
     if (it == sessions.end()) return;
-    const bool orderly = reason == "the peer closed the connection";
+    // A client that goes away — closing, or resetting with batches unread — is not dropped; a
+    // session the server closes for what it sent or failed to send is.
+    const bool orderly = reason == "the peer closed the connection" || reason.starts_with("read failed:") ||
+                         reason.starts_with("write failed:");
     {
       const std::lock_guard lock(stats_mutex);
       stats.bytes_sent += it->second->connection->bytes_sent();

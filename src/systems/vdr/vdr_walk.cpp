@@ -45,16 +45,16 @@ const SelectiveMesh& ReferenceWalk::step(const Vec3& eye, const Vec3& aim) {
 }
 
 namespace {
-std::vector<std::array<uint32_t, 3>> canonical_triangles(const SelectiveMesh& mesh) {
-  std::vector<std::array<uint32_t, 3>> ts = mesh.triangles_by_id();
+using Triangles = std::vector<std::array<uint32_t, 3>>;
+
+Triangles canonical(Triangles ts) {
   for (auto& t : ts) std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
   std::sort(ts.begin(), ts.end());
   return ts;
 }
-}  // namespace
 
-double triangle_accuracy(const SelectiveMesh& mesh, const SelectiveMesh& reference) {
-  const auto got = canonical_triangles(mesh), want = canonical_triangles(reference);
+double accuracy_of(Triangles mesh, const SelectiveMesh& reference) {
+  const auto got = canonical(std::move(mesh)), want = canonical(reference.triangles_by_id());
   if (want.empty()) return 1.0;
   size_t common = 0;
   for (size_t i = 0, j = 0; i < got.size() && j < want.size();) {
@@ -63,6 +63,11 @@ double triangle_accuracy(const SelectiveMesh& mesh, const SelectiveMesh& referen
     else ++common, ++i, ++j;
   }
   return double(common) / double(want.size());
+}
+}  // namespace
+
+double triangle_accuracy(const SelectiveMesh& mesh, const SelectiveMesh& reference) {
+  return accuracy_of(mesh.triangles_by_id(), reference);
 }
 
 double quantile(std::vector<double> v, double q) {
@@ -73,21 +78,17 @@ double quantile(std::vector<double> v, double q) {
 
 VdrWalkResult walk_vdr(VdrClient& client, const VdrClientOptions& options, const std::vector<VdrFrame>& path,
                        const VdrWalkOptions& walk) {
-  std::unique_ptr<ReferenceWalk> reference;
-  if (walk.reference) reference = std::make_unique<ReferenceWalk>(*walk.reference, options.hello, options);
   VdrWalkResult out;
-  double accuracy_sum = 0;
-  uint32_t samples = 0;
+  // The client's triangles where accuracy is sampled; the reference depends on the path alone,
+  // so it runs after the walk and takes no CPU from the client (or, with many, the server).
+  std::vector<std::pair<size_t, Triangles>> sampled;
   for (size_t i = 0; i < path.size(); ++i) {
     const Stopwatch frame;
     VdrWalkFrame f;
     f.report = client.frame(path[i].eye, path[i].aim);
     f.render_ms = walk.render ? walk.render(client.mesh(), path[i]) : 0.0;
     const double work = frame.ms();
-    if (reference) {  // not the client's work: outside the frame's time
-      const SelectiveMesh& ref = reference->step(path[i].eye, path[i].aim);
-      if (i % walk.accuracy_every == 0) f.accuracy = triangle_accuracy(client.mesh(), ref), accuracy_sum += f.accuracy, ++samples;
-    }
+    if (walk.reference && i % walk.accuracy_every == 0) sampled.emplace_back(i, client.mesh().triangles_by_id());
     const double idle = std::max(0.0, walk.frame_ms - work);
     if (idle > 0) std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(idle));
     f.frame_ms = work + idle;
@@ -95,6 +96,19 @@ VdrWalkResult walk_vdr(VdrClient& client, const VdrClientOptions& options, const
     out.frames.push_back(f);
   }
   out.stats = client.stats();
+  double accuracy_sum = 0;
+  if (walk.reference) {
+    ReferenceWalk reference(*walk.reference, options.hello, options);
+    size_t next = 0;
+    for (size_t i = 0; i < path.size() && next < sampled.size(); ++i) {
+      const SelectiveMesh& ref = reference.step(path[i].eye, path[i].aim);
+      if (sampled[next].first != i) continue;
+      out.frames[i].accuracy = accuracy_of(std::move(sampled[next].second), ref);
+      accuracy_sum += out.frames[i].accuracy;
+      ++next;
+    }
+  }
+  const size_t samples = sampled.size();
   const double n = std::max<double>(1, out.frames.size());
   for (const VdrWalkFrame& f : out.frames) {
     out.mean_frame_ms += f.frame_ms / n;
