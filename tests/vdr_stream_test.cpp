@@ -14,6 +14,7 @@
 #include "cellwalk/systems/vdr/vdr_client.hpp"
 #include "cellwalk/systems/vdr/vdr_paths.hpp"
 #include "cellwalk/systems/vdr/vdr_server.hpp"
+#include "cellwalk/systems/vdr/vdr_walk.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk::vdr {
@@ -207,6 +208,46 @@ TEST_F(VdrServerTest, ClientStaysInLockstepUnderDelayLateBatchesAndSpanChanges) 
   EXPECT_GT(server_->stats().batches, 300u);
 }
 
+// Beyond the thesis: start-up, the gradual fill and catch-up after jumps (path 1 jumps twice)
+// keep the lockstep; start-up ends with the mesh of the primed sequential reference, and each
+// jump sends its catch-up requests.
+TEST_F(VdrServerTest, PrimedClientWithCatchUpStaysInLockstepAndStartsFromTheReference) {
+  VdrServerOptions so;
+  so.link.latency_ms = 10;
+  start(so);
+  VdrClientOptions o;
+  o.outgoing.latency_ms = 10;
+  o.hello = {TraversalKind::kPriority, ErrorUnits::kLength, true};
+  o.budget = 12000;
+  o.n = 300;
+  o.adaptive_span = true;
+  o.predictor = Predictor::kTurn;
+  o.gradual_fill = true;
+  o.jump_catch_up = 6;
+  const std::vector<VdrFrame> path = thesis_path(1, stream_bunny().bounds);
+  VdrClient client("127.0.0.1", server_->port(), o);
+  const VdrPrimeReport prime = client.prime(path[0].eye, path[0].aim);
+  EXPECT_TRUE(prime.converged);
+  EXPECT_GT(prime.batches, 2u);
+  EXPECT_EQ(prime.triangles, client.mesh().triangle_count());
+  ReferenceWalk reference(stream_bunny(), o.hello, o);
+  EXPECT_TRUE(reference.prime(path[0].eye, path[0].aim));
+  EXPECT_EQ(triangle_accuracy(client.mesh(), reference.step(path[0].eye, path[0].aim)), 1.0);
+  EXPECT_THROW(client.prime(path[0].eye, path[0].aim), Error) << "a second start-up is refused";
+  uint32_t most_ops = 0;
+  for (const VdrFrame& f : path) {
+    const VdrFrameReport r = client.frame(f.eye, f.aim);
+    most_ops = std::max(most_ops, r.ops);
+    std::this_thread::sleep_for(std::chrono::milliseconds(4));
+    client.rendered(4);
+  }
+  // Requests: start-up's, at most one a frame, and 6 after each of the two jumps.
+  const VdrClientStats stats = client.stats();
+  EXPECT_GE(stats.batches + client.span(), prime.batches + path.size() - client.span() + 2 * o.jump_catch_up);
+  EXPECT_GT(most_ops, o.n) << "a frame applied a batch and its catch-up batches";
+  EXPECT_EQ(server_->stats().sessions_dropped, 0u);
+}
+
 // The server's lockstep check can fail: a client whose digest is not the shadow's is dropped.
 TEST_F(VdrServerTest, ADigestThatDiffersFromTheShadowDropsTheSession) {
   start({});
@@ -335,6 +376,27 @@ TEST_F(VdrServerTest, ClientErrorsNameTheCause) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cellwalk serve"), std::string::npos) << e.what();
   }
+}
+
+// The coordinated turn with tangential acceleration follows a point accelerating round a circle
+// far better than dead reckoning; a jump is not extrapolated, and the step after one is.
+TEST(VdrPrediction, TurnFollowsAcceleratingTurnsAndDoesNotExtrapolateJumps) {
+  const auto orbit = [](float t) {
+    const float angle = 0.02f * t + 0.002f * t * t;
+    return Vec3(5 * std::cos(angle), 1.0f, 5 * std::sin(angle));
+  };
+  for (uint32_t k : {1u, 6u, 12u}) {
+    SCOPED_TRACE("k = " + std::to_string(k));
+    const Vec3 truth = orbit(float(20 + k));
+    const float turn = glm::length(predict_point(Predictor::kTurn, orbit(18), orbit(19), orbit(20), k) - truth);
+    const float linear = glm::length(predict_point(Predictor::kLinear, orbit(18), orbit(19), orbit(20), k) - truth);
+    EXPECT_LT(turn, 0.1f * linear);
+    EXPECT_LT(turn, 0.02f * glm::length(orbit(20) - truth));
+  }
+  const Vec3 a(0.0f), b(0.1f, 0, 0), landed(0, 5, 0), next(0, 5.1f, 0);
+  EXPECT_EQ(predict_point(Predictor::kTurn, a, b, landed, 10), landed);               // a jump: stay where it landed
+  EXPECT_EQ(predict_point(Predictor::kTurn, b, landed, next, 10), next + 10.0f * (next - landed));  // then its motion
+  EXPECT_EQ(predict_point(Predictor::kNone, a, b, landed, 10), landed);
 }
 
 // The commands: connect walks a served model and measures it against the model file; serve

@@ -20,7 +20,7 @@ struct ConnectArgs {
   int path = 1;
   vdr::VdrClientOptions client;
   double frame_ms = 30;
-  bool json = false;
+  bool json = false, prime = false;
 };
 
 void run_connect(ConnectArgs& a) {
@@ -55,10 +55,12 @@ void run_connect(ConnectArgs& a) {
   vdr::VdrWalkOptions walk;
   walk.frame_ms = a.frame_ms;
   walk.reference = model ? &*model : nullptr;
+  walk.prime = a.prime;
   const vdr::VdrWalkResult r = vdr::walk_vdr(client, a.client, vdr::thesis_path(a.path, client.welcome().bounds), walk);
   nlohmann::ordered_json j = {{"server", a.address},
                               {"path", a.path},
                               {"frames", r.frames.size()},
+                              {"start_up", {{"batches", r.prime.batches}, {"converged", r.prime.converged}, {"ms", r.prime.ms}}},
                               {"mean_frame_ms", r.mean_frame_ms},
                               {"mean_update_ms", r.mean_update_ms},
                               {"unmodified_share", r.unmodified_share},
@@ -77,6 +79,9 @@ void run_connect(ConnectArgs& a) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
+  if (a.prime)
+    std::printf("start-up: %u batches in %.0f ms, %u triangles%s\n", r.prime.batches, r.prime.ms, r.prime.triangles,
+                r.prime.converged ? "" : " (stopped at --prime-batches before the view was refined)");
   std::printf("%zu frames of path %d from %s: %.1f ms a frame (T_u %.2f ms), %.1f%% unmodified, span up to %u\n",
               r.frames.size(), a.path, a.address.c_str(), r.mean_frame_ms, r.mean_update_ms, 100 * r.unmodified_share,
               r.stats.largest_span);
@@ -106,6 +111,10 @@ void register_connect(CLI::App& root) {
       ->capture_default_str()->check(CLI::IsMember({"linear", "turn", "none"}));
   cmd->add_option("--max-span", a->client.max_span, "The largest span auto may choose")->capture_default_str()->check(integer_in(1, 64));
   cmd->add_flag("--sequential", a->client.sequential, "Wait for each frame's batch (the thesis's sequential client)");
+  cmd->add_flag("--gradual-fill", a->client.gradual_fill, "Fill the pipeline one request a frame, each for the frame it will arrive by");
+  cmd->add_option("--jump-catch-up", a->client.jump_catch_up, "Extra requests sent after a jump of the view (0: none)")->capture_default_str()->check(integer_in(0, 64));
+  cmd->add_flag("--prime", a->prime, "Refine the first view before frame 0, as a viewer's loading screen would");
+  cmd->add_option("--prime-batches", a->client.prime_batches, "The most batches --prime takes")->capture_default_str()->check(integer_in(1, 1'000'000));
   cmd->add_flag("--lockstep", a->client.hello.lockstep, "Have the server check this client's mesh after every batch");
   cmd->add_flag("!--alarm-level", a->client.server_budget,
                 "Keep under B by the thesis's alarm level B - 2Nf instead of letting the server hold B");

@@ -25,6 +25,9 @@ namespace {
 constexpr double kSmoothing = 1.0 / 8;
 // Frames between span updates (the thesis updates f "periodically").
 constexpr uint64_t kSpanPeriod = 8;
+// A step this many times its predecessor is a cut in the path (a teleport, a scripted jump),
+// not motion: the turn predictor does not extrapolate it (docs/vdr.md "Prediction").
+constexpr float kJumpRatio = 8.0f;
 
 double smooth(double old_value, double sample) { return old_value < 0 ? sample : old_value + kSmoothing * (sample - old_value); }
 }  // namespace
@@ -48,16 +51,26 @@ Vec3 predict_point(Predictor predictor, const Vec3& p2, const Vec3& p1, const Ve
   const Vec3 v0 = p0 - p1;
   if (predictor == Predictor::kNone) return p0;
   if (predictor == Predictor::kLinear) return p0 + float(k) * v0;
-  // The coordinated turn: the step v0 turned, each frame, by the rotation that took v1 to v0.
+  // The coordinated turn with constant tangential acceleration: each step j is turned from the
+  // one before by the curvature the last two steps show, over its length; the lengths change by
+  // l0 − l1 a step (never below zero).
   const Vec3 v1 = p1 - p2;
   const float l0 = glm::length(v0), l1 = glm::length(v1);
-  const Vec3 axis = glm::cross(v1, v0);
-  const float s = glm::length(axis);
-  if (l0 < 1e-12f || l1 < 1e-12f || s < 1e-6f * l0 * l1) return p0 + float(k) * v0;
-  const float angle = std::atan2(s, glm::dot(v1, v0));
-  const glm::quat turn = glm::angleAxis(angle, axis / s);
-  Vec3 p = p0, step = v0;
-  for (uint32_t j = 0; j < k; ++j) p += (step = turn * step);
+  if (l1 > 0 && l0 > kJumpRatio * l1) return p0;  // v0 is a jump: where it landed is the best guess
+  if (l0 > 0 && l1 > kJumpRatio * l0) return p0 + float(k) * v0;  // v1 was a jump: v0 is the motion
+  if (l0 < 1e-12f || l1 < 1e-12f) return p0 + float(k) * v0;
+  const Vec3 cross = glm::cross(v1, v0);
+  const float s = glm::length(cross);
+  const Vec3 axis = s < 1e-6f * l0 * l1 ? Vec3(0.0f) : cross / s;
+  const float curvature = std::atan2(s, glm::dot(v1, v0)) / (0.5f * (l0 + l1));  // radians per unit length
+  Vec3 p = p0, direction = v0 / l0;
+  float length = l0;
+  for (uint32_t j = 0; j < k; ++j) {
+    const float next = std::max(0.0f, length + (l0 - l1));
+    if (s >= 1e-6f * l0 * l1) direction = glm::angleAxis(curvature * 0.5f * (length + next), axis) * direction;
+    p += next * direction;
+    length = next;
+  }
   return p;
 }
 
@@ -84,6 +97,9 @@ struct VdrClient::Impl {
   uint32_t applied = kNoBatch;
   uint64_t digest = 0, frame_index = 0;
   Vec3 eye_pp{0.0f}, eye_p{0.0f}, eye_c{0.0f}, aim_pp{0.0f}, aim_p{0.0f}, aim_c{0.0f};
+  std::vector<bool> catch_up;  // per request sequence: sent after a jump, applied with its predecessor
+  uint32_t catch_up_pending = 0;
+  bool jumped_last_frame = false;
   double frame_ms_smoothed = -1, update_ms = 0;
 
   void on_message(uint8_t type, std::vector<uint8_t> payload) {
@@ -127,7 +143,9 @@ struct VdrClient::Impl {
   [[noreturn]] void failed(const std::string& why) const { throw Error(where + ": " + why); }
 
   // GET-UPDATES's send: the request goes out on the connection's thread, shaped.
-  void send_view(const Vec3& eye, const Vec3& aim, BudgetMode mode) {
+  void send_view(const Vec3& eye, const Vec3& aim, BudgetMode mode, bool is_catch_up = false) {
+    catch_up.push_back(is_catch_up);
+    catch_up_pending += is_catch_up;
     ViewRequest v;
     v.sequence = next_request++;
     v.view = ViewParams{eye, aim, options.alpha, options.tau, mode, options.n, options.server_budget ? options.budget : 0};
@@ -170,6 +188,7 @@ struct VdrClient::Impl {
              " triangles here, " + std::to_string(b.triangles) + " on the server");
     applied = b.sequence;
     ++next_apply;
+    if (b.sequence < catch_up.size() && catch_up[b.sequence]) --catch_up_pending;
     update_ms = watch.ms();  // T_u: the ops; the lockstep digest is a check, not the client's work
     if (options.hello.lockstep) digest = mesh_digest(*mesh);
     return uint32_t(b.ops.size());
@@ -206,8 +225,29 @@ struct VdrClient::Impl {
     if (get_updates.joinable()) get_updates.join();
   }
 
-  BudgetMode mode_now() const {
-    const int64_t alarm = int64_t(options.budget) - 2 * int64_t(options.n) * (options.sequential ? 1 : span);
+  // Applies the arrived catch-up batches that follow the batch just applied. Returns their ops.
+  uint32_t apply_catch_up() {
+    uint32_t ops = 0;
+    while (next_apply < catch_up.size() && catch_up[next_apply]) {
+      const std::optional<Batch> b = take(false);
+      if (!b) break;
+      ops += apply(*b);
+    }
+    return ops;
+  }
+
+  // This frame's step of the eye or the aim is a jump (kJumpRatio times the step before).
+  bool jumped() const {
+    const auto jump = [](const Vec3& p2, const Vec3& p1, const Vec3& p0) {
+      const float l0 = glm::length(p0 - p1), l1 = glm::length(p1 - p2);
+      return l1 > 0 && l0 > kJumpRatio * l1;
+    };
+    return frame_index >= 2 && (jump(eye_pp, eye_p, eye_c) || jump(aim_pp, aim_p, aim_c));
+  }
+
+  // FREE below the alarm level L = B − 2 N f for f requests in flight (§6.3), else BUDGET.
+  BudgetMode mode_now(uint32_t in_flight) const {
+    const int64_t alarm = int64_t(options.budget) - 2 * int64_t(options.n) * in_flight;
     return int64_t(mesh->triangle_count()) > alarm ? BudgetMode::kBudget : BudgetMode::kFree;
   }
 };
@@ -263,7 +303,7 @@ VdrFrameReport VdrClient::frame(const Vec3& eye, const Vec3& aim) {
   m.aim_c = aim;
   m.update_ms = 0;
   if (m.options.sequential) {
-    r.mode = m.mode_now();
+    r.mode = m.mode_now(1);
     m.send_view(eye, aim, r.mode);
     const Stopwatch wait;
     std::optional<Batch> b = m.take(true);
@@ -274,19 +314,33 @@ VdrFrameReport VdrClient::frame(const Vec3& eye, const Vec3& aim) {
     if (std::optional<Batch> b = m.take(false)) {
       r.ops = m.apply(*b);
       r.modified = true;
+      r.ops += m.apply_catch_up();
     }
     const uint32_t before = m.span;
     m.adapt_span();
-    // An unmodified frame sends nothing (§5.3); the first frame sends f requests (Fig. 6.2); a
-    // raised span sends the requests for the frames it adds (§6.3).
-    if (r.modified || m.frame_index == 0 || m.span > before) {
-      r.mode = m.mode_now();
-      while (m.next_request - m.next_apply < m.span) {
-        const uint32_t k = m.next_request - m.next_apply + 1;
-        const Predictor p = m.options.predictor;
-        m.send_view(predict_point(p, m.eye_pp, m.eye_p, eye, k), predict_point(p, m.aim_pp, m.aim_p, aim, k), r.mode);
-      }
+    r.mode = m.mode_now(m.span + m.options.jump_catch_up);
+    const auto pending = [&] { return m.next_request - m.next_apply - m.catch_up_pending; };
+    uint32_t k_sent = pending() + 1;
+    const Predictor p = m.options.predictor;
+    const auto send = [&](uint32_t k, bool is_catch_up) {
+      k_sent = k;
+      m.send_view(predict_point(p, m.eye_pp, m.eye_p, eye, k), predict_point(p, m.aim_pp, m.aim_p, aim, k), r.mode, is_catch_up);
+    };
+    if (m.options.gradual_fill) {
+      // One request a frame while fewer than f are pending, each for the frame it will be
+      // applied at: after those pending, and no sooner than f frames from now.
+      if (pending() < m.span) send(std::max(pending() + 1, m.span), false);
+    } else if (r.modified || m.frame_index == 0 || m.span > before) {
+      // An unmodified frame sends nothing (§5.3); the first frame sends f requests (Fig. 6.2); a
+      // raised span sends the requests for the frames it adds (§6.3).
+      while (pending() < m.span) send(pending() + 1, false);
     }
+    // The frame after a jump (when the motion after it is known): requests for the view the
+    // regular one predicts, applied with it, so the mesh catches up one round trip after the
+    // jump, not N ops a frame later still.
+    if (m.jumped_last_frame && m.next_request > 0)
+      for (uint32_t i = 0; i < m.options.jump_catch_up; ++i) send(k_sent, true);
+    m.jumped_last_frame = m.jumped();
   }
   r.update_ms = m.update_ms;
   r.triangles = m.mesh->triangle_count();
@@ -304,6 +358,33 @@ VdrFrameReport VdrClient::frame(const Vec3& eye, const Vec3& aim) {
 void VdrClient::rendered(double ms) {
   Impl& m = *impl_;
   m.frame_ms_smoothed = smooth(m.frame_ms_smoothed, std::max(ms + m.update_ms, 0.5));
+}
+
+VdrPrimeReport VdrClient::prime(const Vec3& eye, const Vec3& aim) {
+  Impl& m = *impl_;
+  if (m.frame_index != 0 || m.next_request != 0) m.failed("prime() must come before the first frame");
+  const Stopwatch watch;
+  VdrPrimeReport r;
+  // Requests for the one view, kPrimeWindow in flight: the server answers each from the cut its
+  // predecessors left, so the batches refine on without waiting a round trip each.
+  constexpr uint32_t kPrimeWindow = 16;
+  while (!r.converged || m.next_apply < m.next_request) {
+    while (!r.converged && r.batches + (m.next_request - m.next_apply) < m.options.prime_batches &&
+           m.next_request - m.next_apply < kPrimeWindow)
+      m.send_view(eye, aim, m.mode_now(kPrimeWindow));
+    if (m.next_apply == m.next_request) break;  // the limit reached before convergence
+    const std::optional<Batch> b = m.take(true);
+    m.apply(*b);
+    ++r.batches;
+    r.converged = r.converged || b->ops.empty();
+  }
+  r.ms = watch.ms();
+  r.triangles = m.mesh->triangle_count();
+  // The window's later batches queued behind the earlier: the fastest is the round trip the
+  // span rule should start from.
+  const std::lock_guard lock(m.mutex);
+  if (!m.stats.batch_ms.empty()) m.batch_ms_smoothed = *std::min_element(m.stats.batch_ms.begin(), m.stats.batch_ms.end());
+  return r;
 }
 
 const SelectiveMesh& VdrClient::mesh() const { return *impl_->mesh; }

@@ -46,6 +46,14 @@ struct VdrClientOptions {
   float alpha = 0.6f;       // the view cone's half-angle, radians
   uint32_t span = 1;        // f; the starting value when adaptive
   bool adaptive_span = false;
+  // Beyond the thesis: fill the pipeline one request a frame, each predicted for the frame it
+  // will arrive by (k ≥ f), instead of f requests at the first frame for frames 1…f that all
+  // arrive f frames late (docs/vdr.md "The span").
+  bool gradual_fill = false;
+  // Beyond the thesis: the frame after a jump of the eye or the aim (a step 8 times the one
+  // before), this many extra requests for the view the regular request predicts, applied
+  // together with its batch (docs/vdr.md "Jumps"). Those past convergence come back empty.
+  uint32_t jump_catch_up = 0;
   uint32_t max_span = 16;
   bool sequential = false;
   // How a request's view is predicted k frames ahead: none (the current view: an ablation),
@@ -53,6 +61,16 @@ struct VdrClientOptions {
   // its last speed and turns on by its last turn, a coordinated turn; docs/vdr.md "Prediction").
   Predictor predictor = Predictor::kLinear;
   double timeout_s = 30.0;  // for the welcome, and for each batch of a sequential client
+  // prime(): the most batches it takes for the first view (beyond the thesis; docs/vdr.md
+  // "Start-up").
+  uint32_t prime_batches = 4096;
+};
+
+struct VdrPrimeReport {
+  uint32_t batches = 0;    // applied, the last empty one included when it converged
+  bool converged = false;  // a batch came back empty: the cut is the first view's
+  uint32_t triangles = 0;
+  double ms = 0.0;         // the start-up time, wall clock
 };
 
 struct VdrFrameReport {
@@ -77,6 +95,10 @@ class VdrClient {
   VdrClient(const VdrClient&) = delete;
   VdrClient& operator=(const VdrClient&) = delete;
 
+  // Start-up (beyond the thesis): refines the mesh for the first view before frame 0 — a
+  // viewer's loading screen — with a window of requests for that one view in flight, until a
+  // batch comes back empty or options.prime_batches were applied. REQUIRES: before frame().
+  VdrPrimeReport prime(const Vec3& eye, const Vec3& aim);
   // One frame of RENDER, before drawing: `eye` and `aim` are the frame's true view. Throws Error
   // when the server dropped the session or a batch does not apply (naming why).
   VdrFrameReport frame(const Vec3& eye, const Vec3& aim);

@@ -24,6 +24,9 @@ class ReferenceWalk {
   ReferenceWalk(const VdrModel& model, const Hello& hello, const VdrClientOptions& options);
   ~ReferenceWalk();
   const SelectiveMesh& step(const Vec3& eye, const Vec3& aim);
+  // Steps on the one view until a step changes nothing (true) or options.prime_batches steps
+  // (false): the reference of a client that primes.
+  bool prime(const Vec3& eye, const Vec3& aim);
 
  private:
   struct Impl;
@@ -40,6 +43,7 @@ struct VdrWalkOptions {
   std::function<double(const SelectiveMesh&, const VdrFrame&)> render;
   const VdrModel* reference = nullptr;  // for accuracy; none: not measured
   uint32_t accuracy_every = 5;          // the thesis sampled every 5 frames
+  bool prime = false;                   // VdrClient::prime() on the first view (the reference too)
 };
 
 struct VdrWalkFrame {
@@ -50,11 +54,12 @@ struct VdrWalkFrame {
 
 struct VdrWalkResult {
   std::vector<VdrWalkFrame> frames;
-  VdrClientStats stats;
+  VdrClientStats stats;  // start-up's batches included
+  VdrPrimeReport prime;  // empty when the walk did not prime
   double mean_frame_ms = 0, mean_update_ms = 0, mean_render_ms = 0, mean_triangles = 0, mean_ops = 0;
   double mean_accuracy = -1;     // over the sampled frames
   double unmodified_share = 0;   // of all frames
-  double batch_p50_ms = 0, batch_p99_ms = 0;  // T_g's quantiles
+  double batch_p50_ms = 0, batch_p99_ms = 0;  // T_g's quantiles over the walk's batches
 };
 
 // The q-quantile of `v` (0 when empty).
