@@ -79,12 +79,7 @@ TEST(VdrProtocol, MessagesRoundTrip) {
       EXPECT_EQ(b.ops[k].v_r, ops[k].v_r);
     }
   }
-  VdrWelcome w;
-  w.vsplits = m.pm.vsplit_count();
-  w.bounds = m.bounds;
-  w.positions.assign(m.pm.positions.begin(), m.pm.positions.begin() + m.pm.base_vertex_count);
-  w.normals.assign(m.pm.normals.begin(), m.pm.normals.begin() + m.pm.base_vertex_count);
-  w.indices = m.pm.base_indices;
+  const VdrWelcome w = welcome_of(m);
   EXPECT_EQ(encode_welcome(parse_welcome(encode_welcome(w))), encode_welcome(w));
   EXPECT_EQ(parse_error(encode_error("why")), "why");
 }
@@ -376,6 +371,76 @@ TEST_F(VdrServerTest, ClientErrorsNameTheCause) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("cellwalk serve"), std::string::npos) << e.what();
   }
+}
+
+// Sessions past max_sessions are refused with a reason the client names; a session that falls
+// silent is dropped after the idle time, with the reason logged, and its place is free again.
+TEST_F(VdrServerTest, TooManySessionsAreRefusedAndSilentOnesDropped) {
+  VdrServerOptions so;
+  so.max_sessions = 2;
+  so.idle = std::chrono::milliseconds(400);
+  start(so);
+  VdrClientOptions o;
+  o.timeout_s = 5;
+  VdrClient first("127.0.0.1", server_->port(), o), second("127.0.0.1", server_->port(), o);
+  try {
+    VdrClient third("127.0.0.1", server_->port(), o);
+    ADD_FAILURE() << "a third session was welcomed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("the server is full (2 sessions)"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(server_->stats().sessions_refused, 1u);
+  // Both fall silent: each is dropped, and its next frame says why.
+  std::this_thread::sleep_for(std::chrono::milliseconds(900));
+  EXPECT_EQ(server_->stats().sessions_dropped, 2u);
+  try {
+    first.frame({0, 0, 1}, {0, 0, 0});
+    first.frame({0, 0, 1}, {0, 0, 0});
+    ADD_FAILURE() << "a dropped session went on";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("sent nothing for 400 ms"), std::string::npos) << e.what();
+  }
+  const std::vector<std::string> lines = log();
+  EXPECT_EQ(std::count_if(lines.begin(), lines.end(), [](const std::string& l) { return l.find("dropped: sent nothing") != std::string::npos; }), 2);
+  // A client that keeps drawing is never idle.
+  o.sequential = true;
+  const StreamWalk w = stream_walk(server_->port(), 1, o, 5.0, 120);
+  EXPECT_GT(w.stats.ops, 100u);
+  EXPECT_EQ(server_->stats().sessions_dropped, 2u);
+}
+
+// A server that sends a batch past 64 KB (after a welcome of any size) is refused by the client
+// without reading it, naming the size.
+TEST(VdrClientLimits, ABatchPastTheLimitIsRefused) {
+  asio::io_context io;
+  tcp::acceptor acceptor(io, tcp::endpoint(asio::ip::make_address("127.0.0.1"), 0));
+  std::thread hostile([&] {
+    tcp::socket s(io);
+    acceptor.accept(s);
+    std::array<uint8_t, net::kFrameHeaderBytes + 8> hello{};
+    asio::read(s, asio::buffer(hello));
+    asio::write(s, asio::buffer(net::make_frame(uint8_t(VdrMessage::welcome), encode_welcome(welcome_of(stream_bunny())))));
+    asio::write(s, asio::buffer(net::make_frame(uint8_t(VdrMessage::batch), std::vector<uint8_t>(kMaxBatchBytes + 1, 0))));
+    std::vector<uint8_t> sink(256);
+    boost::system::error_code ec;
+    while (!ec) s.read_some(asio::buffer(sink), ec);  // until the client closes
+  });
+  VdrClientOptions o;
+  o.timeout_s = 5;
+  {
+    VdrClient client("127.0.0.1", acceptor.local_endpoint().port(), o);
+    std::string why;
+    for (int k = 0; k < 200 && why.empty(); ++k) {
+      try {
+        client.frame({0, 0, 1}, {0, 0, 0});
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+      } catch (const Error& e) {
+        why = e.what();
+      }
+    }
+    EXPECT_NE(why.find(std::to_string(kMaxBatchBytes + 1)), std::string::npos) << why;
+  }
+  hostile.join();
 }
 
 // The coordinated turn with tangential acceleration follows a point accelerating round a circle

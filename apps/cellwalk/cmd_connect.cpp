@@ -113,6 +113,8 @@ void register_connect(CLI::App& root) {
   cmd->add_flag("--sequential", a->client.sequential, "Wait for each frame's batch (the thesis's sequential client)");
   cmd->add_flag("--gradual-fill", a->client.gradual_fill, "Fill the pipeline one request a frame, each for the frame it will arrive by");
   cmd->add_option("--jump-catch-up", a->client.jump_catch_up, "Extra requests sent after a jump of the view (0: none)")->capture_default_str()->check(integer_in(0, 64));
+  cmd->add_flag("--catch-up-as-start-up", a->client.catch_up_as_start_up,
+                "With --prime and --jump-catch-up: send at least as many catch-up requests as start-up took batches");
   cmd->add_flag("--prime", a->prime, "Refine the first view before frame 0, as a viewer's loading screen would");
   cmd->add_option("--prime-batches", a->client.prime_batches, "The most batches --prime takes")->capture_default_str()->check(integer_in(1, 1'000'000));
   cmd->add_flag("--lockstep", a->client.hello.lockstep, "Have the server check this client's mesh after every batch");

@@ -1,7 +1,10 @@
 // cellwalk path: generate a camera path of one session kind on a world's navigation graph, or
 // on the graph of its free space the path planner makes (--planner; also when the world's own
 // graph does not lie in it, as an import's loop does not).
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <numbers>
 #include <optional>
 #include <string>
 
@@ -10,6 +13,7 @@
 #include "cellwalk/scene/path_generator.hpp"
 #include "cellwalk/scene/scene_file.hpp"
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/vdr/vdr_paths.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
 
@@ -30,6 +34,19 @@ PlannedSpace plan_or_fly(const World& world, PlannerOptions options, bool may_fl
   }
 }
 
+// The VDR thesis's camera paths (seed 004, §4.6) around the world's bounds: 1 approaches and
+// scans (180 frames), 2 approaches and orbits (194) — the inspection paths for one model.
+CameraPath thesis_camera_path(const SceneInfo& info, int which, double fps) {
+  CameraPath out;
+  const std::vector<vdr::VdrFrame> frames = vdr::thesis_path(which, info.bounds);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const Vec3 d = glm::normalize(frames[i].aim - frames[i].eye);
+    out.frames.push_back({double(i) / fps, frames[i].eye, float(std::atan2(-d.x, -d.z) * 180 / std::numbers::pi),
+                          float(std::asin(std::clamp(d.y, -1.0f, 1.0f)) * 180 / std::numbers::pi)});
+  }
+  return out;
+}
+
 void register_path(CLI::App& root) {
   auto* cmd = root.add_subcommand("path", "Generate a camera path in a world's streets or, planned, its free space");
   struct Args {
@@ -42,7 +59,9 @@ void register_path(CLI::App& root) {
   cmd->add_option("file", args->scene, "World file (.cww) or scene file (.cwscene)")->required();
   cmd->add_option("-o,--output", args->out, "Path file to write")->required();
   cmd->add_option("--kind", args->kind,
-                  "Session kind: normal, slow, fast, turning, backward, back-and-forth, random")
+                  "Session kind: normal, slow, fast, turning, backward, back-and-forth, random; or around the world's "
+                  "bounds, the VDR thesis's paths: scan (approach, then scans up and across; 180 frames) or orbit "
+                  "(approach, then orbit; 194 frames)")
       ->capture_default_str();
   cmd->add_option("--frames", args->params.frames, "Number of frames")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--fps", args->params.fps, "Frames per second of path time")->capture_default_str()->check(number_in(0.1, 1000));
@@ -64,6 +83,16 @@ void register_path(CLI::App& root) {
       ->needs(planner);
   cmd->callback([args] {
     refuse_same_files({args->scene}, {args->out});
+    if (args->kind == "scan" || args->kind == "orbit") {
+      if (args->planner) fail("--planner", "plans street and free-space paths; scan and orbit go around the world's bounds");
+      const SceneInfo info = is_world_file(args->scene) ? World(args->scene).info() : SceneReader(args->scene).info();
+      CameraPath path = thesis_camera_path(info, args->kind == "scan" ? 1 : 2, args->params.fps);
+      path.world = path_world(info);
+      write_path(path, args->out);
+      std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(), path.frames.back().time,
+                  args->out.c_str());
+      return;
+    }
     args->params.kind = parse_session_kind(args->kind);
     const bool world_file = is_world_file(args->scene);
     std::optional<World> world;

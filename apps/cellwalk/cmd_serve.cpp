@@ -43,7 +43,8 @@ struct ServeArgs {
   std::string input;
   uint16_t port = 0;
   net::LinkShape link;
-  double seconds = 0;
+  double seconds = 0, idle_s = 600;
+  uint32_t max_sessions = 256;
   bool json = false, quiet = false;
 };
 
@@ -58,6 +59,8 @@ void serve_vdr(const ServeArgs& a) {
   options.port = a.port;
   options.link = a.link;
   options.log = session_log(a);
+  options.max_sessions = a.max_sessions;
+  options.idle = std::chrono::milliseconds(int64_t(a.idle_s * 1000));
   vdr::VdrServer server(model, options);
   std::printf("serving %s (%u base triangles, %u vsplits) on 127.0.0.1:%u\n", a.input.c_str(),
               model.pm.base_triangle_count, model.pm.vsplit_count(), unsigned(server.port()));
@@ -70,6 +73,7 @@ void serve_vdr(const ServeArgs& a) {
     const nlohmann::ordered_json j = {{"port", server.port()},
                                       {"sessions", s.sessions_opened},
                                       {"dropped", s.sessions_dropped},
+                                      {"refused", s.sessions_refused},
                                       {"batches", s.batches},
                                       {"ops", s.ops},
                                       {"bytes_sent", s.bytes_sent},
@@ -79,8 +83,8 @@ void serve_vdr(const ServeArgs& a) {
     std::printf("%s\n", j.dump(2).c_str());
     return;
   }
-  std::printf("served %llu sessions (%llu dropped), %llu batches, %llu ops, %llu bytes\n", (unsigned long long)s.sessions_opened,
-              (unsigned long long)s.sessions_dropped, (unsigned long long)s.batches, (unsigned long long)s.ops,
+  std::printf("served %llu sessions (%llu dropped, %llu refused), %llu batches, %llu ops, %llu bytes\n", (unsigned long long)s.sessions_opened,
+              (unsigned long long)s.sessions_dropped, (unsigned long long)s.sessions_refused, (unsigned long long)s.batches, (unsigned long long)s.ops,
               (unsigned long long)s.bytes_sent);
 }
 
@@ -96,6 +100,10 @@ void register_serve(CLI::App& root) {
   cmd->add_option("--latency-ms", a->link.latency_ms, "Delay added to every reply (one way)")->capture_default_str()->check(number_in(0, 60000));
   cmd->add_option("--bandwidth-mbit", a->link.bandwidth_mbit, "Rate of the replies in Mbit/s (0: unlimited)")->capture_default_str()->check(number_in(0, 1e6));
   cmd->add_option("--seconds", a->seconds, "Stop after this many seconds (0: at SIGINT or SIGTERM)")->capture_default_str()->check(number_in(0, 1e9));
+  cmd->add_option("--max-sessions", a->max_sessions, "VDR: sessions at once; one more is told the server is full")
+      ->capture_default_str()->check(integer_in(1, 1'000'000));
+  cmd->add_option("--idle-s", a->idle_s, "VDR: drop a session that sends nothing for this long (0: never)")
+      ->capture_default_str()->check(number_in(0, 1e6));
   cmd->add_flag("--quiet", a->quiet, "Do not log sessions");
   cmd->add_flag("--json", a->json, "Print the summary as JSON when stopped");
   cmd->callback([a] {

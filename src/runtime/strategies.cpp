@@ -7,6 +7,7 @@
 #include "cellwalk/systems/stratified/stratified_strategy.hpp"
 #include "cellwalk/systems/lichiang/lichiang_strategy.hpp"
 #include "cellwalk/systems/pvs_stream_client/pvs_stream_strategy.hpp"
+#include "cellwalk/systems/vdr_client/vdr_strategy.hpp"
 #include "cellwalk/strategy/strategy.hpp"
 #include "systems/brute/brute.hpp"
 #include "systems/scene_tree/scene_tree_strategy.hpp"
@@ -16,7 +17,7 @@ namespace cellwalk {
 std::vector<std::string> strategy_names() {
   return {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]",
           "vlod[:key=value,...]", "stratified[:key=value,...]",
-          "lichiang[:key=value,...]", "pvs-stream[:key=value,...]"};
+          "lichiang[:key=value,...]", "pvs-stream[:key=value,...]", "vdr[:key=value,...]"};
 }
 
 namespace {
@@ -38,6 +39,7 @@ void check_strategy_name(const std::string& name) {
   if (is_stratified_strategy_name(name)) return void(parse_stratified_strategy_name(name));
   if (is_lichiang_strategy_name(name)) return void(parse_lichiang_strategy_name(name));
   if (is_pvs_stream_strategy_name(name)) return void(parse_pvs_stream_strategy_name(name));
+  if (is_vdr_strategy_name(name)) return void(parse_vdr_strategy_name(name));
   unknown_strategy(name);
 }
 
@@ -56,6 +58,7 @@ std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& wo
     return std::make_unique<LiChiangStrategy>(world, parse_lichiang_strategy_name(name), options);
   if (is_pvs_stream_strategy_name(name))
     return std::make_unique<PvsStreamStrategy>(world, parse_pvs_stream_strategy_name(name), options);
+  if (is_vdr_strategy_name(name)) return std::make_unique<VdrStrategy>(world, parse_vdr_strategy_name(name), options);
   if (name == "hdov-pb") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kPb);
   unknown_strategy(name);
 }

@@ -24,6 +24,13 @@ int StrategySetting::whole(int lo, int hi) const {
   return int(v);
 }
 
+std::pair<std::string, uint16_t> StrategySetting::host_port(const std::string& what_to_give) const {
+  const size_t colon = value.rfind(':');
+  if (colon == std::string::npos || colon == 0)
+    fail("strategy \"" + name + "\"", key + "=" + value + " must be " + what_to_give);
+  return {value.substr(0, colon), uint16_t(StrategySetting{name, key + " port", value.substr(colon + 1)}.whole(1, 65535))};
+}
+
 void StrategySetting::choice(std::initializer_list<const char*> options) const {
   for (const char* o : options)
     if (value == o) return;

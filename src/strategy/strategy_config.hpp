@@ -4,7 +4,9 @@
 
 #include <functional>
 #include <initializer_list>
+#include <cstdint>
 #include <string>
+#include <utility>
 
 namespace cellwalk {
 
@@ -17,6 +19,8 @@ struct StrategySetting {
   double number(double lo, double hi) const;
   // The value as a whole number in [lo, hi]; fails on anything else.
   int whole(int lo, int hi) const;
+  // The value as HOST:PORT (port 1–65535); fails naming `what_to_give` (what the value should be).
+  std::pair<std::string, uint16_t> host_port(const std::string& what_to_give) const;
   // Fails unless the value is one of `options`.
   void choice(std::initializer_list<const char*> options) const;
   // Fails: the key is not a setting of this strategy; `known` lists the ones that are.

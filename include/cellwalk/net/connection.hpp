@@ -62,6 +62,8 @@ class Connection : public std::enable_shared_from_this<Connection> {
   // Closes after the messages already queued are written; on_close gets `reason`.
   void close_after_sending(const std::string& reason);
   void close(const std::string& reason);
+  // The largest incoming message from now on (a protocol whose first message is its largest).
+  void set_max_payload(uint32_t bytes) { limits_.max_payload = bytes; }
   bool open() const { return open_; }
   uint64_t bytes_sent() const { return bytes_sent_; }
   uint64_t bytes_received() const { return bytes_received_; }

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <optional>
 #include <thread>
+#include <tuple>
 #include <unordered_map>
 
 #include "cellwalk/core/error.hpp"
@@ -47,11 +48,8 @@ PvsStreamConfig parse_pvs_stream_strategy_name(const std::string& name) {
       }
       c.url = s.value;
     } else if (s.key == "server") {
-      const size_t colon = s.value.rfind(':');
-      if (colon == std::string::npos || colon == 0)
-        fail("strategy \"" + name + "\"", "server=" + s.value + " must be HOST:PORT (e.g. server=127.0.0.1:7878) or the world's URL on a web server (http://HOST:PORT/PATH.cww)");
-      c.host = s.value.substr(0, colon);
-      c.port = uint16_t(StrategySetting{s.name, "server port", s.value.substr(colon + 1)}.whole(1, 65535));
+      std::tie(c.host, c.port) =
+          s.host_port("HOST:PORT (e.g. server=127.0.0.1:7878) or the world's URL on a web server (http://HOST:PORT/PATH.cww)");
     } else if (s.key == "latency_ms") {
       c.latency_ms = s.number(0, 10000);
       link_given = true;

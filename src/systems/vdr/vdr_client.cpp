@@ -111,6 +111,7 @@ struct VdrClient::Impl {
       if (type != uint8_t(VdrMessage::welcome)) throw net::ProtocolError("the server did not welcome this client");
       lock.unlock();
       VdrWelcome w = parse_welcome(payload);
+      connection->set_max_payload(kMaxBatchBytes);  // this runs on the connection's thread
       lock.lock();
       welcome = std::move(w);
     } else {
@@ -264,7 +265,8 @@ VdrClient::VdrClient(const std::string& host, uint16_t port, VdrClientOptions op
   tcp::socket socket(m.io);
   if (!ec) asio::connect(socket, endpoints, ec);
   if (ec) m.failed("cannot connect (" + ec.message() + "); is `cellwalk serve MODEL.cwvdr` running there?");
-  // The welcome carries the base mesh: allow it 256 MiB; a batch is checked against 64 KB.
+  // The welcome carries the base mesh: allow it 256 MiB; every later message is a batch of at
+  // most 64 KB (or a short error), and the limit drops to that once the welcome is in.
   m.connection = std::make_shared<net::Connection>(std::move(socket), options.outgoing,
                                                    net::ConnectionLimits{256u << 20, size_t(1) << 20, std::chrono::milliseconds(30000)});
   m.connection->start([&m](uint8_t type, std::vector<uint8_t> payload) { m.on_message(type, std::move(payload)); },
@@ -355,6 +357,8 @@ VdrFrameReport VdrClient::frame(const Vec3& eye, const Vec3& aim) {
   return r;
 }
 
+void VdrClient::set_alpha(float alpha) { impl_->options.alpha = alpha; }
+
 void VdrClient::rendered(double ms) {
   Impl& m = *impl_;
   m.frame_ms_smoothed = smooth(m.frame_ms_smoothed, std::max(ms + m.update_ms, 0.5));
@@ -380,6 +384,8 @@ VdrPrimeReport VdrClient::prime(const Vec3& eye, const Vec3& aim) {
   }
   r.ms = watch.ms();
   r.triangles = m.mesh->triangle_count();
+  if (m.options.jump_catch_up > 0 && m.options.catch_up_as_start_up)
+    m.options.jump_catch_up = std::max(m.options.jump_catch_up, r.batches);
   // The window's later batches queued behind the earlier: the fastest is the round trip the
   // span rule should start from.
   const std::lock_guard lock(m.mutex);

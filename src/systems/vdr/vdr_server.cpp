@@ -23,10 +23,22 @@ namespace {
 constexpr size_t kMaxUnconfirmed = 256;
 }  // namespace
 
+VdrWelcome welcome_of(const VdrModel& model) {
+  const ProgressiveMesh& pm = model.pm;
+  VdrWelcome w;
+  w.vsplits = pm.vsplit_count();
+  w.bounds = model.bounds;
+  w.positions.assign(pm.positions.begin(), pm.positions.begin() + pm.base_vertex_count);
+  w.normals.assign(pm.normals.begin(), pm.normals.begin() + pm.base_vertex_count);
+  w.indices = pm.base_indices;
+  return w;
+}
+
 struct VdrServer::Impl {
   struct Session {
     uint64_t id = 0;
     std::shared_ptr<net::Connection> connection;
+    std::optional<asio::steady_timer> idle;  // restarted by every message
     std::optional<Traversal> traversal;  // from the hello on
     std::optional<SelectiveMesh> shadow;  // lockstep only
     std::deque<std::pair<uint32_t, uint64_t>> unconfirmed;  // (batch, the shadow's digest after it)
@@ -55,13 +67,7 @@ struct VdrServer::Impl {
   Impl(const VdrModel& m, VdrServerOptions o)
       : model(m), options(std::move(o)), listener(io, options.port, options.address) {
     const ProgressiveMesh& pm = model.pm;
-    VdrWelcome w;
-    w.vsplits = pm.vsplit_count();
-    w.bounds = model.bounds;
-    w.positions.assign(pm.positions.begin(), pm.positions.begin() + pm.base_vertex_count);
-    w.normals.assign(pm.normals.begin(), pm.normals.begin() + pm.base_vertex_count);
-    w.indices = pm.base_indices;
-    welcome = encode_welcome(w);
+    welcome = encode_welcome(welcome_of(model));
     stats.model_bytes = model.dag.byte_size() + pm.positions.size() * 24 + pm.adjusted.size() * 4 + pm.v_p.size() * 16;
   }
 
@@ -70,21 +76,55 @@ struct VdrServer::Impl {
   }
 
   void open(tcp::socket socket) {
+    if (sessions.size() >= options.max_sessions) return refuse(std::move(socket));
     auto s = std::make_shared<Session>();
     s->id = next_id++;
     s->connection = std::make_shared<net::Connection>(std::move(socket), options.link, options.limits);
+    s->idle.emplace(io);
     sessions[s->id] = s;
     {
       const std::lock_guard lock(stats_mutex);
       ++stats.sessions_opened;
+      stats.sessions_open = sessions.size();
     }
     log("session " + std::to_string(s->id) + " opened");
     std::weak_ptr<Session> weak = s;
     s->connection->start(
         [this, weak](uint8_t type, std::vector<uint8_t> payload) {
-          if (auto session = weak.lock()) handle(*session, type, payload);
+          if (auto session = weak.lock()) {
+            watch_idle(session);
+            handle(*session, type, payload);
+          }
         },
         [this, id = s->id](const std::string& reason) { closed(id, reason); });
+    watch_idle(s);
+  }
+
+  // One session too many: told why, then closed; it never becomes a session.
+  void refuse(tcp::socket socket) {
+    const std::string why = "the server is full (" + std::to_string(options.max_sessions) + " sessions); try again later";
+    auto c = std::make_shared<net::Connection>(std::move(socket), net::LinkShape{}, options.limits);
+    c->start([](uint8_t, std::vector<uint8_t>) {}, [](const std::string&) {});
+    c->send(uint8_t(VdrMessage::error), encode_error(why));
+    c->close_after_sending(why);
+    {
+      const std::lock_guard lock(stats_mutex);
+      ++stats.sessions_refused;
+    }
+    log("connection refused: " + why);
+  }
+
+  // (Re)starts the session's idle timer; when it fires, the session is dropped.
+  void watch_idle(const std::shared_ptr<Session>& s) {
+    if (options.idle.count() <= 0) return;
+    s->idle->expires_after(options.idle);
+    s->idle->async_wait([weak = std::weak_ptr<Session>(s), ms = options.idle.count()](const boost::system::error_code& ec) {
+      const auto session = weak.lock();
+      if (ec || !session) return;
+      const std::string why = "sent nothing for " + std::to_string(ms) + " ms";
+      session->connection->send(uint8_t(VdrMessage::error), encode_error(why));
+      session->connection->close_after_sending(why);
+    });
   }
 
   void closed(uint64_t id, const std::string& reason) {
@@ -100,8 +140,11 @@ struct VdrServer::Impl {
       if (!orderly) ++stats.sessions_dropped;
     }
     log("session " + std::to_string(id) + (orderly ? " closed" : " dropped: " + reason));
+    it->second->idle->cancel();
     asio::post(io, [keep = it->second] {});  // the connection calls this from inside itself
     sessions.erase(it);
+    const std::lock_guard lock(stats_mutex);
+    stats.sessions_open = sessions.size();
   }
 
   void handle(Session& s, uint8_t type, const std::vector<uint8_t>& payload) {

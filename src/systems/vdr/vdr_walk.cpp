@@ -91,6 +91,7 @@ VdrWalkResult walk_vdr(VdrClient& client, const VdrClientOptions& options, const
   // so it runs after the walk and takes no CPU from the client (or, with many, the server).
   std::vector<std::pair<size_t, Triangles>> sampled;
   if (walk.prime && !path.empty()) out.prime = client.prime(path[0].eye, path[0].aim);
+  if (walk.after_start_up) walk.after_start_up();
   for (size_t i = 0; i < path.size(); ++i) {
     const Stopwatch frame;
     VdrWalkFrame f;
@@ -105,6 +106,7 @@ VdrWalkResult walk_vdr(VdrClient& client, const VdrClientOptions& options, const
     out.frames.push_back(f);
   }
   out.stats = client.stats();
+  if (walk.before_reference) walk.before_reference();
   double accuracy_sum = 0;
   if (walk.reference) {
     ReferenceWalk reference(*walk.reference, options.hello, options);

@@ -54,6 +54,9 @@ struct VdrClientOptions {
   // before), this many extra requests for the view the regular request predicts, applied
   // together with its batch (docs/vdr.md "Jumps"). Those past convergence come back empty.
   uint32_t jump_catch_up = 0;
+  // With jump_catch_up: after prime(), at least as many as start-up's batches (a view's cut
+  // from far away costs about what the first view's did; a large model needs more).
+  bool catch_up_as_start_up = false;
   uint32_t max_span = 16;
   bool sequential = false;
   // How a request's view is predicted k frames ahead: none (the current view: an ablation),
@@ -102,6 +105,9 @@ class VdrClient {
   // One frame of RENDER, before drawing: `eye` and `aim` are the frame's true view. Throws Error
   // when the server dropped the session or a batch does not apply (naming why).
   VdrFrameReport frame(const Vec3& eye, const Vec3& aim);
+  // The view cone's half-angle for the requests from now on (a viewer's lens; each request
+  // carries it).
+  void set_alpha(float alpha);
   // T_r of the frame just drawn (0 if the caller does not draw), for Eq. 6.3.1.
   void rendered(double ms);
 

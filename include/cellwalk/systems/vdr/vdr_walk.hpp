@@ -44,6 +44,10 @@ struct VdrWalkOptions {
   const VdrModel* reference = nullptr;  // for accuracy; none: not measured
   uint32_t accuracy_every = 5;          // the thesis sampled every 5 frames
   bool prime = false;                   // VdrClient::prime() on the first view (the reference too)
+  // Called after start-up (or before frame 0) and after the last frame, before the reference
+  // runs: many clients measured together meet there, so all walk at once and no reference takes
+  // CPU from a walk.
+  std::function<void()> after_start_up, before_reference;
 };
 
 struct VdrWalkFrame {
