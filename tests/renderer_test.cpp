@@ -353,6 +353,24 @@ TEST_F(RendererTest, MeshLargerThanTheBudgetIsDrawnButNotKept) {
   EXPECT_EQ(stats.gpu_misses, 1u);
 }
 
+// A transient item's mesh changes between frames under one key: each frame draws the mesh it
+// is given now, and none is kept (a view-dependent client would fill the cache with stale
+// copies, one per frame).
+TEST_F(RendererTest, TransientItemIsDrawnAsGivenEachFrameAndNeverKept) {
+  Meshes meshes;
+  meshes.add(0, make_box(Vec3(0.0f), Vec3(1.0f)));
+  std::vector<DrawItem> items{{0, 0, rgba8(200, 200, 200), DrawKind::kObject, true}};
+  Renderer renderer(settings());
+  RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.gpu_resident_bytes, 0u);
+  EXPECT_EQ(id_at(renderer.read_ids(), kWidth / 2, kHeight / 2), 1u);
+  meshes.add(0, make_box(Vec3(3.0f, 0.0f, 0.0f), Vec3(0.5f)));  // moved off the centre
+  stats = renderer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(stats.gpu_misses, 1u);
+  EXPECT_EQ(stats.gpu_resident_bytes, 0u);
+  EXPECT_EQ(id_at(renderer.read_ids(), kWidth / 2, kHeight / 2), 0u) << "the first frame's mesh was drawn again";
+}
+
 // An object whose level has no triangles (every piece culled) is drawn as nothing, and its
 // neighbours as ever. Under the sanitizers this caught a copy from a null index array.
 TEST_F(RendererTest, EmptyMeshDrawsNothingAndLeavesTheOthersAlone) {

@@ -243,6 +243,34 @@ TEST_F(VdrServerTest, PrimedClientWithCatchUpStaysInLockstepAndStartsFromTheRefe
   EXPECT_EQ(server_->stats().sessions_dropped, 0u);
 }
 
+// Catch-up as large as start-up is capped: with N = 10, start-up takes hundreds of batches, and
+// that many catch-up requests after a jump would leave a lockstep server holding more than 256
+// unconfirmed batches (it would drop the session).
+TEST_F(VdrServerTest, CatchUpAsLargeAsStartUpIsCapped) {
+  start({});
+  VdrClientOptions o;
+  o.hello = {TraversalKind::kPriority, ErrorUnits::kLength, true};
+  o.n = 10;
+  o.span = 2;
+  o.predictor = Predictor::kTurn;
+  o.gradual_fill = true;
+  o.jump_catch_up = 1;
+  o.catch_up_as_start_up = true;
+  const std::vector<VdrFrame> path = thesis_path(1, stream_bunny().bounds);
+  VdrClient client("127.0.0.1", server_->port(), o);
+  const VdrPrimeReport prime = client.prime(path[0].eye, path[0].aim);
+  ASSERT_GT(prime.batches, 256u) << "start-up must take more batches than a lockstep server holds";
+  uint32_t most_pending = 0;
+  for (size_t i = 0; i < 140; ++i) {  // past the jump at frame 110; the catch-up goes at 111
+    const VdrFrameReport r = client.frame(path[i].eye, path[i].aim);
+    most_pending = std::max(most_pending, r.pending);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  EXPECT_GT(most_pending, o.span + kMaxJumpCatchUp / 2) << "no catch-up after the jump";
+  EXPECT_LE(most_pending, o.span + kMaxJumpCatchUp + 1);
+  EXPECT_EQ(server_->stats().sessions_dropped, 0u) << log().back();
+}
+
 // The server's lockstep check can fail: a client whose digest is not the shadow's is dropped.
 TEST_F(VdrServerTest, ADigestThatDiffersFromTheShadowDropsTheSession) {
   start({});
@@ -462,6 +490,11 @@ TEST(VdrPrediction, TurnFollowsAcceleratingTurnsAndDoesNotExtrapolateJumps) {
   EXPECT_EQ(predict_point(Predictor::kTurn, a, b, landed, 10), landed);               // a jump: stay where it landed
   EXPECT_EQ(predict_point(Predictor::kTurn, b, landed, next, 10), next + 10.0f * (next - landed));  // then its motion
   EXPECT_EQ(predict_point(Predictor::kNone, a, b, landed, 10), landed);
+  // A step 8 times the one before but shorter than least_jump is motion (starting to move).
+  const Vec3 slow(0.1f, 0, 0), fast(1.2f, 0, 0);
+  EXPECT_EQ(predict_point(Predictor::kTurn, a, slow, fast, 2, 0.0f), fast);
+  // Not a jump: steps of 1.1 + 1.0 and 1.1 + 2.0 (the length grew by 1.0 a step).
+  EXPECT_NEAR(predict_point(Predictor::kTurn, a, slow, fast, 2, 5.0f).x, 1.2f + 2.1f + 3.1f, 1e-4f);
 }
 
 // The commands: connect walks a served model and measures it against the model file; serve

@@ -93,7 +93,7 @@ Camera camera_of(const VdrFrame& f, const Aabb& bounds, float alpha, float aspec
   return c;
 }
 
-// Draws a selective mesh as one view-dependent patch; each call uploads it anew (the mesh changed).
+// Draws a selective mesh as one view-dependent patch, transient: each call uploads it anew.
 class MeshPainter {
  public:
   MeshPainter(const VdrBenchParams& p, const Aabb& bounds) : p_(p), bounds_(bounds) {
@@ -108,7 +108,7 @@ class MeshPainter {
     mesh_.positions = mesh.positions();
     mesh_.normals = mesh.normals();
     mesh_.indices = mesh.indices();
-    const DrawItem item{0, version_++, rgba8(200, 190, 170), DrawKind::kPatch};
+    const DrawItem item{0, 0, rgba8(200, 190, 170), DrawKind::kPatch, true};
     renderer_->render(camera_of(f, bounds_, p_.alpha, float(p_.width) / float(p_.height)), std::span(&item, 1),
                       [this](const DrawItem&) { return &mesh_; });
     return watch.ms();
@@ -119,7 +119,6 @@ class MeshPainter {
   Aabb bounds_;
   std::unique_ptr<Renderer> renderer_;
   Mesh mesh_;
-  uint32_t version_ = 0;
 };
 
 // The path rotated by `angle` about the vertical axis through the model's centre.

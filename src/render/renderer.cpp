@@ -266,7 +266,7 @@ struct Renderer::Impl {
   bool draw_item(const DrawItem& item, const MeshProvider& provider, RenderStats& stats) {
     if (item.id >= kMaxPixelId) fail("render", "draw item id " + std::to_string(item.id) + " is past the id buffer's range");
     const render::MeshKey key{item.id, item.lod, uint8_t(item.kind)};
-    const render::GpuMesh* resident = cache.find(key);
+    const render::GpuMesh* resident = item.transient ? nullptr : cache.find(key);
     if (resident != nullptr) {
       ++stats.gpu_hits;
       draw(*resident, item);
@@ -279,7 +279,7 @@ struct Renderer::Impl {
     uint64_t bytes = render::GpuMesh::bytes_for(*mesh);
     stats.uploaded_bytes += bytes;
     stats.triangles += mesh->triangle_count();
-    if (bytes <= cache.budget()) {
+    if (!item.transient && bytes <= cache.budget()) {
       draw(*cache.insert(key, *mesh), item);
     } else {
       cache.make_room(bytes);

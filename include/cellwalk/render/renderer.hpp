@@ -42,6 +42,9 @@ struct DrawItem {
   uint32_t lod = 0;
   Rgba8 color = rgba8(200, 200, 200);  // used when the mesh has no per-vertex colours
   DrawKind kind = DrawKind::kObject;
+  // Its mesh changes from frame to frame (a view-dependent client's): drawn from a transient
+  // buffer and never cached, so no stale copies fill the cache.
+  bool transient = false;
 };
 
 // The value an item writes into the id buffer: object id + 1 for objects (0 is the

@@ -26,8 +26,11 @@ constexpr double kSmoothing = 1.0 / 8;
 // Frames between span updates (the thesis updates f "periodically").
 constexpr uint64_t kSpanPeriod = 8;
 // A step this many times its predecessor is a cut in the path (a teleport, a scripted jump),
-// not motion: the turn predictor does not extrapolate it (docs/vdr.md "Prediction").
+// not motion: the turn predictor does not extrapolate it (docs/vdr.md "Prediction"). The client
+// also asks the step to be this share of the model's diagonal, so that starting to move or to
+// turn is not a jump.
 constexpr float kJumpRatio = 8.0f;
+constexpr float kJumpShare = 0.05f;
 
 double smooth(double old_value, double sample) { return old_value < 0 ? sample : old_value + kSmoothing * (sample - old_value); }
 }  // namespace
@@ -47,7 +50,7 @@ Predictor parse_predictor(const std::string& word) {
   fail("--predictor " + word, "is not a predictor: use none, linear or turn");
 }
 
-Vec3 predict_point(Predictor predictor, const Vec3& p2, const Vec3& p1, const Vec3& p0, uint32_t k) {
+Vec3 predict_point(Predictor predictor, const Vec3& p2, const Vec3& p1, const Vec3& p0, uint32_t k, float least_jump) {
   const Vec3 v0 = p0 - p1;
   if (predictor == Predictor::kNone) return p0;
   if (predictor == Predictor::kLinear) return p0 + float(k) * v0;
@@ -56,8 +59,8 @@ Vec3 predict_point(Predictor predictor, const Vec3& p2, const Vec3& p1, const Ve
   // l0 − l1 a step (never below zero).
   const Vec3 v1 = p1 - p2;
   const float l0 = glm::length(v0), l1 = glm::length(v1);
-  if (l1 > 0 && l0 > kJumpRatio * l1) return p0;  // v0 is a jump: where it landed is the best guess
-  if (l0 > 0 && l1 > kJumpRatio * l0) return p0 + float(k) * v0;  // v1 was a jump: v0 is the motion
+  if (l1 > 0 && l0 > kJumpRatio * l1 && l0 > least_jump) return p0;  // v0 is a jump: where it landed is the best guess
+  if (l0 > 0 && l1 > kJumpRatio * l0 && l1 > least_jump) return p0 + float(k) * v0;  // v1 was a jump: v0 is the motion
   if (l0 < 1e-12f || l1 < 1e-12f) return p0 + float(k) * v0;
   const Vec3 cross = glm::cross(v1, v0);
   const float s = glm::length(cross);
@@ -237,11 +240,15 @@ struct VdrClient::Impl {
     return ops;
   }
 
-  // This frame's step of the eye or the aim is a jump (kJumpRatio times the step before).
+  // The shortest step that can be a jump: kJumpShare of the model's diagonal.
+  float least_jump() const { return kJumpShare * glm::length(welcome->bounds.size()); }
+
+  // This frame's step of the eye or the aim is a jump (kJumpRatio times the step before, and
+  // at least least_jump()).
   bool jumped() const {
-    const auto jump = [](const Vec3& p2, const Vec3& p1, const Vec3& p0) {
+    const auto jump = [this](const Vec3& p2, const Vec3& p1, const Vec3& p0) {
       const float l0 = glm::length(p0 - p1), l1 = glm::length(p1 - p2);
-      return l1 > 0 && l0 > kJumpRatio * l1;
+      return l1 > 0 && l0 > kJumpRatio * l1 && l0 > least_jump();
     };
     return frame_index >= 2 && (jump(eye_pp, eye_p, eye_c) || jump(aim_pp, aim_p, aim_c));
   }
@@ -320,13 +327,15 @@ VdrFrameReport VdrClient::frame(const Vec3& eye, const Vec3& aim) {
     }
     const uint32_t before = m.span;
     m.adapt_span();
-    r.mode = m.mode_now(m.span + m.options.jump_catch_up);
+    r.mode = m.mode_now(m.span + m.catch_up_pending + (m.jumped_last_frame ? m.options.jump_catch_up : 0));
     const auto pending = [&] { return m.next_request - m.next_apply - m.catch_up_pending; };
     uint32_t k_sent = pending() + 1;
     const Predictor p = m.options.predictor;
     const auto send = [&](uint32_t k, bool is_catch_up) {
       k_sent = k;
-      m.send_view(predict_point(p, m.eye_pp, m.eye_p, eye, k), predict_point(p, m.aim_pp, m.aim_p, aim, k), r.mode, is_catch_up);
+      const float least = m.least_jump();
+      m.send_view(predict_point(p, m.eye_pp, m.eye_p, eye, k, least), predict_point(p, m.aim_pp, m.aim_p, aim, k, least), r.mode,
+                  is_catch_up);
     };
     if (m.options.gradual_fill) {
       // One request a frame while fewer than f are pending, each for the frame it will be
@@ -371,7 +380,6 @@ VdrPrimeReport VdrClient::prime(const Vec3& eye, const Vec3& aim) {
   VdrPrimeReport r;
   // Requests for the one view, kPrimeWindow in flight: the server answers each from the cut its
   // predecessors left, so the batches refine on without waiting a round trip each.
-  constexpr uint32_t kPrimeWindow = 16;
   while (!r.converged || m.next_apply < m.next_request) {
     while (!r.converged && r.batches + (m.next_request - m.next_apply) < m.options.prime_batches &&
            m.next_request - m.next_apply < kPrimeWindow)
@@ -385,7 +393,7 @@ VdrPrimeReport VdrClient::prime(const Vec3& eye, const Vec3& aim) {
   r.ms = watch.ms();
   r.triangles = m.mesh->triangle_count();
   if (m.options.jump_catch_up > 0 && m.options.catch_up_as_start_up)
-    m.options.jump_catch_up = std::max(m.options.jump_catch_up, r.batches);
+    m.options.jump_catch_up = std::max(m.options.jump_catch_up, std::min(r.batches, kMaxJumpCatchUp));
   // The window's later batches queued behind the earlier: the fastest is the round trip the
   // span rule should start from.
   const std::lock_guard lock(m.mutex);

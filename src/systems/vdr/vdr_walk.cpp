@@ -32,15 +32,15 @@ ReferenceWalk::~ReferenceWalk() = default;
 
 bool ReferenceWalk::prime(const Vec3& eye, const Vec3& aim) {
   for (uint32_t i = 0; i < impl_->options.prime_batches; ++i) {
-    step(eye, aim);
+    step(eye, aim, kPrimeWindow);  // the alarm level of the client's start-up
     if (impl_->ops.empty()) return true;
   }
   return false;
 }
 
-const SelectiveMesh& ReferenceWalk::step(const Vec3& eye, const Vec3& aim) {
+const SelectiveMesh& ReferenceWalk::step(const Vec3& eye, const Vec3& aim, uint32_t in_flight) {
   Impl& m = *impl_;
-  const int64_t alarm = int64_t(m.options.budget) - 2 * int64_t(m.options.n);
+  const int64_t alarm = int64_t(m.options.budget) - 2 * int64_t(m.options.n) * in_flight;
   const BudgetMode mode = int64_t(m.mesh.triangle_count()) > alarm ? BudgetMode::kBudget : BudgetMode::kFree;
   m.ops.clear();
   const uint32_t budget = m.options.server_budget ? m.options.budget : 0;

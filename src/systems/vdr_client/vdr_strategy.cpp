@@ -81,9 +81,11 @@ struct VdrStrategy::Impl {
   std::unique_ptr<vdr::VdrClient> client;
   Mesh drawn;            // the client's mesh as the renderer takes it, this frame
   // A world of one object is that object, drawn with its id and colour, so compare matches it
-  // with the truth's; the model of a world of many is one patch of all of them.
-  DrawItem item{0, 0, rgba8(200, 190, 170), DrawKind::kPatch};
-  uint32_t version = 0;  // the item's level, new each frame: the renderer uploads the mesh anew
+  // with the truth's; the model of a world of many is one patch of all of them. Transient: the
+  // renderer uploads the changing mesh each frame and keeps no copy.
+  DrawItem item{0, 0, rgba8(200, 190, 170), DrawKind::kPatch, true};
+  bool started = false;     // prime() was called (once, even if it failed)
+  double last_update_ms = 0;  // the last frame's T_u
   vdr::VdrPrimeReport prime;
   uint64_t peak = 0;
   std::optional<Clock::time_point> epoch, last_frame;  // wall time of path time 0; of the last select
@@ -165,7 +167,7 @@ VdrStrategy::VdrStrategy(const World& world, const VdrStrategyConfig& config, co
     fail(s.model_file, "no such VDR model; build it from the world's source: cellwalk vdr-build MODEL -o " + s.model_file);
   s.model = vdr::read_vdr_file(s.model_file);
   s.check_model(world);
-  if (world.object_count() == 1) s.item = {0, 0, world.object(0).color, DrawKind::kObject};
+  if (world.object_count() == 1) s.item = {0, 0, world.object(0).color, DrawKind::kObject, true};
   s.start();  // on a throw, ~Impl stops what started
 }
 
@@ -178,20 +180,24 @@ void VdrStrategy::select(const Camera& camera, std::vector<DrawItem>& items, Fra
   s.pace(stats.time);
   const Stopwatch watch;
   const Vec3 eye = camera.position;
-  const float reach = std::max(glm::length(s.model.bounds.center() - eye), 1e-3f * glm::length(s.model.bounds.size()));
-  const Vec3 aim = eye + reach * camera.forward();
+  // The aim point one model radius ahead: turning moves it by the angle times the radius, which
+  // the jump rule (a step over 5 % of the diagonal) does not take for a jump.
+  const Vec3 aim = eye + std::max(0.5f * glm::length(s.model.bounds.size()), 1e-6f) * camera.forward();
   s.client->set_alpha(Impl::alpha_of(camera));
+  if (!s.started && s.config.ours) {
+    s.started = true;
+    s.prime = s.client->prime(eye, aim);  // start-up: the first view's cut
+  }
+  s.started = true;
   const auto now = Clock::now();
-  if (!s.last_frame && s.config.ours) s.prime = s.client->prime(eye, aim);  // start-up: the first view's cut
-  if (s.last_frame)  // the frame before: its drawing and the rest, for Eq. 6.3.1
-    s.client->rendered(std::chrono::duration<double, std::milli>(now - *s.last_frame).count());
-  s.last_frame = Clock::now();
-  s.client->frame(eye, aim);
+  if (s.last_frame)  // the frame before, less its T_u (rendered() adds it): for Eq. 6.3.1
+    s.client->rendered(std::max(0.0, std::chrono::duration<double, std::milli>(now - *s.last_frame).count() - s.last_update_ms));
+  s.last_frame = now;
+  s.last_update_ms = s.client->frame(eye, aim).update_ms;
   const vdr::SelectiveMesh& m = s.client->mesh();
   s.drawn.positions = m.positions();
   s.drawn.normals = m.normals();
   s.drawn.indices = m.indices();
-  s.item.lod = s.version++;
   items.assign(1, s.item);
   s.peak = std::max(s.peak, s.resident());
   if (!s.epoch) s.epoch = Clock::now() - std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(stats.time));

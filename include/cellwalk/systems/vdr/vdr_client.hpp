@@ -33,8 +33,14 @@ std::string predictor_name(Predictor p);  // "none", "linear", "turn"
 Predictor parse_predictor(const std::string& word);
 
 // Where a point moving through p2, p1, p0 (oldest first, one frame apart) will be k frames after
-// p0 under `predictor`.
-Vec3 predict_point(Predictor predictor, const Vec3& p2, const Vec3& p1, const Vec3& p0, uint32_t k);
+// p0 under `predictor`. Turn takes a step 8 times the one before and longer than `least_jump`
+// for a jump (docs/vdr.md "Prediction").
+Vec3 predict_point(Predictor predictor, const Vec3& p2, const Vec3& p1, const Vec3& p0, uint32_t k, float least_jump = 0.0f);
+
+// Start-up's requests in flight at once (VdrClient::prime), and the most catch-up requests
+// catch_up_as_start_up makes (far under the 256 batches a lockstep server holds unconfirmed).
+inline constexpr uint32_t kPrimeWindow = 16;
+inline constexpr uint32_t kMaxJumpCatchUp = 64;
 
 struct VdrClientOptions {
   net::LinkShape outgoing;  // the client → server direction
@@ -54,8 +60,9 @@ struct VdrClientOptions {
   // before), this many extra requests for the view the regular request predicts, applied
   // together with its batch (docs/vdr.md "Jumps"). Those past convergence come back empty.
   uint32_t jump_catch_up = 0;
-  // With jump_catch_up: after prime(), at least as many as start-up's batches (a view's cut
-  // from far away costs about what the first view's did; a large model needs more).
+  // With jump_catch_up: after prime(), at least as many as start-up's batches, up to
+  // kMaxJumpCatchUp (a view's cut from far away costs about what the first view's did; a large
+  // model needs more).
   bool catch_up_as_start_up = false;
   uint32_t max_span = 16;
   bool sequential = false;

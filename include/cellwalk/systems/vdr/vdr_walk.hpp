@@ -23,7 +23,8 @@ class ReferenceWalk {
   // REQUIRES: `model` outlives this.
   ReferenceWalk(const VdrModel& model, const Hello& hello, const VdrClientOptions& options);
   ~ReferenceWalk();
-  const SelectiveMesh& step(const Vec3& eye, const Vec3& aim);
+  // One batch for the view, in BUDGET mode above the alarm level B − 2N·in_flight.
+  const SelectiveMesh& step(const Vec3& eye, const Vec3& aim, uint32_t in_flight = 1);
   // Steps on the one view until a step changes nothing (true) or options.prime_batches steps
   // (false): the reference of a client that primes.
   bool prime(const Vec3& eye, const Vec3& aim);
