@@ -188,7 +188,6 @@ void VdrStrategy::select(const Camera& camera, std::vector<DrawItem>& items, Fra
     s.started = true;
     s.prime = s.client->prime(eye, aim);  // start-up: the first view's cut
   }
-  s.started = true;
   const auto now = Clock::now();
   if (s.last_frame)  // the frame before, less its T_u (rendered() adds it): for Eq. 6.3.1
     s.client->rendered(std::max(0.0, std::chrono::duration<double, std::milli>(now - *s.last_frame).count() - s.last_update_ms));
