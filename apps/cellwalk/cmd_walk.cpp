@@ -29,8 +29,12 @@ WalkSummary walk_one(const ReplayOptions& args, const World& world, const Camera
   const std::string& label = run.label;
   const std::unique_ptr<Strategy> strategy = std::move(run.strategy);
   Progress progress("walk " + label, path.frames.size());
-  auto frames = walk(path, args.lens.lens(), *strategy, renderer,
-                     [&](size_t done, size_t) { progress.update(done); });
+  // A budget counts live bytes: what a frame freed goes back to the kernel before the next one.
+  const bool budgeted = budget.total_bytes > 0;
+  auto frames = walk(path, args.lens.lens(), *strategy, renderer, [&](size_t done, size_t) {
+    if (budgeted) return_freed_heap();
+    progress.update(done);
+  });
   progress.finish();
   WalkSummary summary = summarize(label, frames);
   summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, strategy->peak_resident_bytes());
