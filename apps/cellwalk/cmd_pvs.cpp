@@ -12,6 +12,7 @@
 #include "cellwalk/precompute/engine.hpp"
 #include "cellwalk/visibility/stored_vlod.hpp"
 #include "checks.hpp"
+#include "experiments/common/bench_support.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "precompute/dov_compare.hpp"
@@ -34,6 +35,8 @@ struct Args {
   std::string disk_order = "tsp";
   bool disk_order_given = false;
   bool json = false;
+  std::optional<uint64_t> show;  // --show CELL
+  std::vector<double> at;        // --at X,Y,Z
 };
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
@@ -194,6 +197,73 @@ visibility::PvsSizes write_sets(const Args& a, const World& world, const std::st
   return {};
 }
 
+// The cell --show or --at names, refused with what the world offers when there is none.
+CellId cell_asked(const Args& a, const ViewCellPartition& partition) {
+  if (a.show) {
+    if (*a.show >= partition.cell_count())
+      fail("pvs --show", "cell " + std::to_string(*a.show) + " does not exist: the world's " + partition.kind() +
+                             " has cells 0 to " + std::to_string(partition.cell_count() - 1));
+    return CellId(*a.show);
+  }
+  const Vec3 p(float(a.at[0]), float(a.at[1]), float(a.at[2]));
+  const std::optional<CellId> cell = partition.locate(p);
+  if (!cell)
+    fail("pvs --at", "the point (" + bench::fixed(a.at[0], 3) + ", " + bench::fixed(a.at[1], 3) + ", " +
+                         bench::fixed(a.at[2], 3) + ") lies in no view cell; give a point inside the world's cells");
+  return *cell;
+}
+
+// pvs --show / --at: what the stored sets say about one cell, read back as every consumer reads
+// them, so a user can check the engine's decision (issue 15).
+void run_show(const Args& a, const World& world) {
+  if (!world.file().has_section(visibility::kCellsSection))
+    fail("pvs " + std::string(a.show ? "--show" : "--at"),
+         a.world + " holds no visible sets yet; compute them first with cellwalk pvs " + a.world);
+  const visibility::StoredPvs pvs(world);
+  const CellId id = cell_asked(a, pvs.partition());
+  const ViewCell& cell = pvs.partition().cell(id);
+  const char* state = cell.solid ? "solid" : cell.skipped ? "skipped" : "computed";
+  const std::optional<VisibleSet> set = cell.computed() ? pvs.set(id) : std::nullopt;
+  const std::vector<std::string> names = world.object_names();
+  if (a.json) {
+    nlohmann::ordered_json objects = nlohmann::ordered_json::array();
+    if (set)
+      for (size_t i = 0; i < set->objects.size(); ++i) {
+        nlohmann::ordered_json o = {{"id", set->objects[i]}, {"name", names.at(set->objects[i])}};
+        if (!set->dov.empty()) o["dov"] = set->dov[i];
+        objects.push_back(o);
+      }
+    const nlohmann::ordered_json j = {{"cell", id},
+                                      {"cells", pvs.partition().cell_count()},
+                                      {"partition", pvs.partition().kind()},
+                                      {"box", {{"min", {cell.box.min.x, cell.box.min.y, cell.box.min.z}},
+                                               {"max", {cell.box.max.x, cell.box.max.y, cell.box.max.z}}}},
+                                      {"depth", cell.depth},
+                                      {"state", state},
+                                      {"engine", pvs.engine()},
+                                      {"conservative", pvs.conservative()},
+                                      {"objects", objects}};
+    std::printf("%s\n", j.dump(2).c_str());
+    return;
+  }
+  std::printf("cell %u of %zu (%s, depth %u): box (%.3f, %.3f, %.3f) to (%.3f, %.3f, %.3f), %s\n", id,
+              pvs.partition().cell_count(), pvs.partition().kind().c_str(), cell.depth, cell.box.min.x, cell.box.min.y,
+              cell.box.min.z, cell.box.max.x, cell.box.max.y, cell.box.max.z, state);
+  if (!set) {
+    std::printf("  no set: %s\n", cell.solid ? "the cell lies inside closed geometry, where no viewer can stand"
+                                              : "pvs --along left it out; compute it with a pvs run that covers it");
+    return;
+  }
+  std::printf("  engine %s (%s): %zu visible objects of %zu\n", pvs.engine().c_str(),
+              pvs.conservative() ? "conservative" : "sampled", set->objects.size(), world.object_count());
+  for (size_t i = 0; i < set->objects.size(); ++i) {
+    const ObjectId o = set->objects[i];
+    std::printf("  %8u  %s", o, names.at(o).empty() ? "(no name)" : names.at(o).c_str());
+    if (!set->dov.empty()) std::printf("  dov %.3g", set->dov[i]);
+    std::printf("\n");
+  }
+}
+
 void run_merge(const Args& a, const World& world) {
   const std::string out = a.out.empty() ? a.world : a.out;
   refuse_same_files(a.merge, {out});
@@ -321,7 +391,20 @@ void register_pvs(CLI::App& root) {
   cmd->add_flag("--dov-midpoint", a->options.dov_midpoint_weights, "DoV: eq. 5.11 at pixel centres, as the thesis writes it");
   cmd->add_option("--threads", a->threads, "Worker threads (0 = all cores)")->capture_default_str()->check(thread_count());
   cmd->add_flag("--json", a->json, "Print the report as JSON");
-  cmd->callback([a, vlod_options, disk_order] {
+  auto* show = cmd->add_option("--show", a->show, "Print one cell's box and its stored visible objects (ids, names); compute nothing")
+                   ->check(integer_in(0, int64_t(UINT32_MAX)));
+  auto* at = cmd->add_option("--at", a->at, "Print the stored set of the cell holding the point X,Y,Z; compute nothing")
+                 ->expected(3)
+                 ->delimiter(',')
+                 ->check(number_in(-1e30, 1e30));
+  show->excludes(at);
+  cmd->callback([a, vlod_options, disk_order, show, at] {
+    if (show->count() + at->count() > 0) {
+      for (const CLI::Option* o : {show, at})
+        if (o->count() > 0 && a->check + a->dov_compare > 0)
+          fail("pvs " + o->get_name(), "reads the stored sets; it cannot be combined with --check or --dov-compare");
+      return run_show(*a, World(a->world));
+    }
     a->disk_order_given = disk_order->count() > 0;
     if (a->disk_order_given && a->merge.empty() && a->engine != "vlod")
       fail("pvs --disk-order", "lays the geometry out for a vlod run only; give --engine vlod or leave it out");

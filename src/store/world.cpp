@@ -80,6 +80,16 @@ Mesh World::decode_level(ObjectId id, uint32_t level, std::span<const uint8_t> b
   return mesh;
 }
 
+std::vector<std::string> World::object_names() const {
+  std::vector<std::string> names(objects_.size());
+  if (!file_.has_section(world_sections::kNames)) return names;
+  const std::vector<uint8_t> bytes = file_.read_all(world_sections::kNames);
+  ByteReader r(bytes, file_.path() + ": section names", 0);
+  for (std::string& name : names) name = r.get_string("object name");
+  if (r.remaining() != 0) r.error("holds more names than the world has objects");
+  return names;
+}
+
 uint64_t World::resident_bytes() const {
   return objects_.capacity() * sizeof(ObjectRecord) + lods_.capacity() * sizeof(LodRecord) +
          file_.resident_bytes() + info_.nav.nodes.size() * sizeof(Vec3) + info_.nav.edges.size() * 8;

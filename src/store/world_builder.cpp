@@ -97,15 +97,19 @@ BuildReport build_world(const std::string& scene_file, const std::string& world_
   std::vector<ObjectRecord> objects;
   std::vector<LodRecord> lods;
   objects.reserve(scene.object_count());
+  ByteWriter names;  // of the objects, for a user who asks what a cell sees (pvs --show)
 
   writer.begin_section(world_sections::kGeometry);
   for (size_t begin = 0; begin < scene.object_count(); begin += batch_size) {
     const size_t n = std::min(batch_size, scene.object_count() - begin);
     std::vector<EncodedObject> batch(n);
+    std::vector<std::string> batch_names(n);
     parallel_for(n, threads, [&](size_t i) {
       const Object object = scene.read_object(static_cast<ObjectId>(begin + i));
       batch[i] = encode_object(object, params);
+      batch_names[i] = object.name;
     });
+    for (const std::string& name : batch_names) names.put_string(name);
     for (EncodedObject& e : batch) {
       e.record.first_lod = lods.size();
       e.record.lod_count = static_cast<uint32_t>(e.levels.size());
@@ -156,6 +160,9 @@ BuildReport build_world(const std::string& scene_file, const std::string& world_
   writer.end_section();
   writer.begin_section(world_sections::kParams);
   writer.write(as_bytes(params_json(params, scene_file)));
+  writer.end_section();
+  writer.begin_section(world_sections::kNames);
+  writer.write(names.bytes());
   writer.end_section();
   if (extra_sections) {
     std::vector<Aabb> bounds;

@@ -10,6 +10,7 @@ inline constexpr const char* kScene = "scene";        // SceneInfo: generator, b
 inline constexpr const char* kObjects = "objects";    // one ObjectRecord per object
 inline constexpr const char* kLods = "lods";          // one LodRecord per level
 inline constexpr const char* kGeometry = "geometry";  // encoded levels (mesh_codec)
+inline constexpr const char* kNames = "names";        // object names, in id order (optional)
 
 constexpr size_t kObjectRecordBytes = 24 + 4 + 4 + 8;
 constexpr size_t kLodRecordBytes = 8 + 4 + 4 + 4 + 4;

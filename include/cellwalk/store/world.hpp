@@ -83,6 +83,9 @@ class World {
   std::vector<uint8_t> read_level(ObjectId id, uint32_t level) const;
   Mesh decode_level(ObjectId id, uint32_t level, std::span<const uint8_t> bytes) const;
 
+  // The objects' names, in id order, read from the file on each call (the directory does not
+  // hold them: a budgeted run never needs them). Empty names for a world built without them.
+  std::vector<std::string> object_names() const;
   // Memory the open world holds: directory, checksum and section tables.
   uint64_t resident_bytes() const;
 
