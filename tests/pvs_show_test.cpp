@@ -12,10 +12,10 @@
 namespace cellwalk {
 namespace {
 
-// Five boxes in a row along x with names no generator would give (spaces, UTF-8, empty), on a
-// ground slab, so cells see different subsets.
+// Five boxes in a row along x with names no generator would give (spaces, UTF-8, empty, a tab,
+// Latin-1 bytes that are not UTF-8), on a ground slab, so cells see different subsets.
 std::vector<Object> named_row() {
-  const std::vector<std::string> names = {"ground", "box one", "caja número 2", "", "box\t4", "last"};
+  const std::vector<std::string> names = {"ground", "box one", "caja número 2", "", "box\t4", "caf\xe9"};
   std::vector<Object> out;
   for (size_t i = 0; i < names.size(); ++i) {
     Object o;
@@ -67,7 +67,9 @@ TEST(PvsShow, EveryCellReadsBackItsStoredSetWithTheScenesNames) {
     ASSERT_EQ(j["objects"].size(), count);
     for (size_t i = 0; i < count; ++i) {
       EXPECT_EQ(j["objects"][i]["id"], set->objects[i]);
-      EXPECT_EQ(j["objects"][i]["name"], objects.at(set->objects[i]).name);
+      // JSON carries text: bytes that are not UTF-8 come out as U+FFFD.
+      const std::string& name = objects.at(set->objects[i]).name;
+      EXPECT_EQ(j["objects"][i]["name"], name == "caf\xe9" ? "caf\xef\xbf\xbd" : name);
     }
     // --at the cell's centre names the same cell.
     const Vec3 centre = (cell.box.min + cell.box.max) * 0.5f;
@@ -77,10 +79,29 @@ TEST(PvsShow, EveryCellReadsBackItsStoredSetWithTheScenesNames) {
     EXPECT_EQ(at["cell"], c);
     EXPECT_EQ(at["objects"], j["objects"]);
   }
-  // The text form lists every name of a computed cell's set.
-  const test::CommandResult text = test::run_cellwalk("pvs " + file + " --show 0");
-  EXPECT_EQ(text.exit_code, 0) << text.output;
-  EXPECT_NE(text.output.find("cell 0 of"), std::string::npos) << text.output;
+  // The text form lists every object of the cell's set, one line each, control bytes escaped.
+  for (CellId c = 0; c < pvs.partition().cell_count(); ++c) {
+    if (!pvs.partition().cell(c).computed()) continue;
+    const test::CommandResult text = test::run_cellwalk("pvs " + file + " --show " + std::to_string(c));
+    EXPECT_EQ(text.exit_code, 0) << text.output;
+    EXPECT_NE(text.output.find("cell " + std::to_string(c) + " of"), std::string::npos) << text.output;
+    const std::optional<VisibleSet> set = pvs.set(c);
+    for (const ObjectId o : set->objects) {
+      const std::string& name = objects.at(o).name;
+      const std::string shown_name = name.empty() ? "(no name)" : name == "box\t4" ? "box\\x094" : name;
+      EXPECT_NE(text.output.find(std::to_string(o) + "  " + shown_name + "\n"), std::string::npos) << text.output;
+    }
+  }
+}
+
+// A world built before names were kept has none, and a world of no objects keeps no section.
+TEST(PvsShow, WorldsWithoutNamesShowEmptyOnes) {
+  const World old(test::source_path("tests/data/seeds/cube.cww"));
+  EXPECT_EQ(old.object_names(), std::vector<std::string>(old.object_count()));
+  test::TempDir dir;
+  const World none(test::write_world(dir, {}, NavGraph{}, "empty"));
+  EXPECT_EQ(none.object_count(), 0u);
+  EXPECT_TRUE(none.object_names().empty());
 }
 
 TEST(PvsShow, ACellOrPointThatIsNotThereIsOneLineNamingIt) {
@@ -91,7 +112,7 @@ TEST(PvsShow, ACellOrPointThatIsNotThereIsOneLineNamingIt) {
   EXPECT_NE(none.output.find("no visible sets yet"), std::string::npos) << none.output;
   ASSERT_EQ(test::run_cellwalk("pvs " + file + " --cells grid:10 --points 4").exit_code, 0);
   for (const char* args : {"--show 99999", "--at 1e6,0,0", "--at 1,2", "--at 1,2,nan", "--show 1 --check 2",
-                                  "--show 1 --at 0,0,0"}) {
+                                  "--show 1 --at 0,0,0", "--show 1 --cells grid:5", "--at 0,0,0 -o x.cww"}) {
     SCOPED_TRACE(args);
     const test::CommandResult r = test::run_cellwalk("pvs " + file + " " + std::string(args));
     EXPECT_NE(r.exit_code, 0) << r.output;

@@ -103,7 +103,8 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
                                 {"recall", recall}, {"min_recall", min_recall}, {"tightness", tightness},
                                 {"cells_failing", failing}, {"engine_seconds_per_cell", engine_s / n},
                                 {"truth_seconds_per_cell", truth_s / n}, {"cells", cells}};
-    std::printf("%s\n", j.dump(2).c_str());
+    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
+    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
   } else {
     std::printf("check %s: %zu cells, recall %.4f (min %.4f, %llu cells below 1), tightness %.3f, %.3f s per cell\n",
                 engine.name().c_str(), cells.size(), recall, min_recall, (unsigned long long)failing, tightness,
@@ -135,7 +136,8 @@ void run_dov_compare(const Args& a, const World& world, const ViewCellPartition&
                                 {"engine_speedup", engine_speedup}, {"max_dov_difference", c.max_difference},
                                 {"largest_pixel_weight", c.largest_pixel_weight}, {"pairs", c.pairs},
                                 {"one_sided", c.one_sided}, {"one_sided_max_dov", c.one_sided_max_dov}};
-    std::printf("%s\n", j.dump(2).c_str());
+    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
+    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
     return;
   }
   std::printf("dov cube maps at %d² on %llu %s cells, exact vs %s interleaved:\n"
@@ -197,6 +199,10 @@ visibility::PvsSizes write_sets(const Args& a, const World& world, const std::st
   return {};
 }
 
+std::string point_text(double x, double y, double z) {
+  return "(" + bench::fixed(x, 3) + ", " + bench::fixed(y, 3) + ", " + bench::fixed(z, 3) + ")";
+}
+
 // The cell --show or --at names, refused with what the world offers when there is none.
 CellId cell_asked(const Args& a, const ViewCellPartition& partition) {
   if (a.show) {
@@ -207,18 +213,42 @@ CellId cell_asked(const Args& a, const ViewCellPartition& partition) {
   }
   const Vec3 p(float(a.at[0]), float(a.at[1]), float(a.at[2]));
   const std::optional<CellId> cell = partition.locate(p);
-  if (!cell)
-    fail("pvs --at", "the point (" + bench::fixed(a.at[0], 3) + ", " + bench::fixed(a.at[1], 3) + ", " +
-                         bench::fixed(a.at[2], 3) + ") lies in no view cell; give a point inside the world's cells");
+  if (!cell) {
+    Aabb extent;
+    for (CellId c = 0; c < partition.cell_count(); ++c) extent.extend(partition.cell(c).box);
+    fail("pvs --at", "the point " + point_text(a.at[0], a.at[1], a.at[2]) +
+                         " lies in no view cell; the world's cells span " +
+                         point_text(extent.min.x, extent.min.y, extent.min.z) + " to " +
+                         point_text(extent.max.x, extent.max.y, extent.max.z));
+  }
   return *cell;
+}
+
+// A name as one line of text: control characters as \xHH.
+std::string printable(const std::string& name) {
+  std::string out;
+  for (const char c : name) {
+    if (static_cast<unsigned char>(c) >= 0x20 && c != 0x7f) {
+      out += c;
+      continue;
+    }
+    char hex[5];
+    std::snprintf(hex, sizeof hex, "\\x%02x", static_cast<unsigned char>(c));
+    out += hex;
+  }
+  return out.empty() ? "(no name)" : out;
 }
 
 // pvs --show / --at: what the stored sets say about one cell, read back as every consumer reads
 // them, so a user can check the engine's decision (issue 15).
 void run_show(const Args& a, const World& world) {
-  if (!world.file().has_section(visibility::kCellsSection))
-    fail("pvs " + std::string(a.show ? "--show" : "--at"),
-         a.world + " holds no visible sets yet; compute them first with cellwalk pvs " + a.world);
+  const std::string option = "pvs " + std::string(a.show ? "--show" : "--at");
+  if (!world.file().has_section(visibility::kCellsSection)) {
+    if (world.file().has_section(visibility::kVlodSection))
+      fail(option, a.world + " holds vLOD sets only, which this does not read yet; compute plain sets beside them with cellwalk pvs " +
+                       a.world + " --engine conservative");
+    fail(option, a.world + " holds no visible sets yet; compute them first with cellwalk pvs " + a.world);
+  }
   const visibility::StoredPvs pvs(world);
   const CellId id = cell_asked(a, pvs.partition());
   const ViewCell& cell = pvs.partition().cell(id);
@@ -243,7 +273,8 @@ void run_show(const Args& a, const World& world) {
                                       {"engine", pvs.engine()},
                                       {"conservative", pvs.conservative()},
                                       {"objects", objects}};
-    std::printf("%s\n", j.dump(2).c_str());
+    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
+    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
     return;
   }
   std::printf("cell %u of %zu (%s, depth %u): box (%.3f, %.3f, %.3f) to (%.3f, %.3f, %.3f), %s\n", id,
@@ -258,7 +289,7 @@ void run_show(const Args& a, const World& world) {
               pvs.conservative() ? "conservative" : "sampled", set->objects.size(), world.object_count());
   for (size_t i = 0; i < set->objects.size(); ++i) {
     const ObjectId o = set->objects[i];
-    std::printf("  %8u  %s", o, names.at(o).empty() ? "(no name)" : names.at(o).c_str());
+    std::printf("  %8u  %s", o, printable(names.at(o)).c_str());
     if (!set->dov.empty()) std::printf("  dov %.3g", set->dov[i]);
     std::printf("\n");
   }
@@ -274,7 +305,8 @@ void run_merge(const Args& a, const World& world) {
     nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else j["sizes"] = sizes_json(sizes);
-    std::printf("%s\n", j.dump(2).c_str());
+    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
+    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
     return;
   }
   std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
@@ -342,7 +374,8 @@ void run_compute(const Args& a, const World& world) {
                                 {"seconds", compute_s}, {"cells_per_second", rate}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else if (!sharded) j["sizes"] = sizes_json(sizes);
-    std::printf("%s\n", j.dump(2).c_str());
+    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
+    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
     return;
   }
   std::printf("pvs %s: %zu %s cells (%llu solid, %llu skipped off the --along path); computed %llu (%llu resumed) in %.1f s, "
@@ -398,11 +431,12 @@ void register_pvs(CLI::App& root) {
                  ->delimiter(',')
                  ->check(number_in(-1e30, 1e30));
   show->excludes(at);
-  cmd->callback([a, vlod_options, disk_order, show, at] {
+  cmd->callback([cmd, a, vlod_options, disk_order, show, at] {
     if (show->count() + at->count() > 0) {
-      for (const CLI::Option* o : {show, at})
-        if (o->count() > 0 && a->check + a->dov_compare > 0)
-          fail("pvs " + o->get_name(), "reads the stored sets; it cannot be combined with --check or --dov-compare");
+      const std::string asked = show->count() > 0 ? "--show" : "--at";
+      for (const CLI::Option* o : cmd->get_options())
+        if (o->count() > 0 && o->nonpositional() && o != show && o != at && o->get_name() != "--json")
+          fail("pvs " + asked, "reads the stored sets and computes nothing; leave out " + o->get_name());
       return run_show(*a, World(a->world));
     }
     a->disk_order_given = disk_order->count() > 0;

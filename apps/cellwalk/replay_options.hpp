@@ -45,7 +45,7 @@ struct ReplayOptions {
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
         ->capture_default_str();
     cmd.add_option("-o,--output", out, "Output folder")->capture_default_str();
-    cmd.add_option("--budget", budget_mib, "Memory budget, MiB (0 = none): all that grows with the world and the path; walk keeps the process within it plus the baseline it reports")
+    cmd.add_option("--budget", budget_mib, "Memory budget, MiB (0 = none): all that grows with the world and the path; walk holds the process to it plus the baseline it reports (under CPU load not yet always: docs/design.md, Memory)")
         ->capture_default_str()
         ->check(number_in(0, 1 << 24));
     cmd.add_option("--eta", eta, "hdov-vsc: DoV threshold η (HDoV thesis §5.3)")->capture_default_str()->check(number_in(0, 1));

@@ -1,6 +1,7 @@
 // `cellwalk build`: a scene file streamed into a world file. Objects are read in order, their
 // LOD chains built and encoded in parallel a bounded batch at a time, and written in order, so
-// memory holds one batch of meshes plus the directory (40 + 24 × levels bytes per object).
+// memory holds one batch of meshes plus the directory (40 + 24 × levels bytes per object) and
+// the names (4 bytes plus the name per object).
 #include <algorithm>
 #include <atomic>
 #include <exception>
@@ -161,9 +162,11 @@ BuildReport build_world(const std::string& scene_file, const std::string& world_
   writer.begin_section(world_sections::kParams);
   writer.write(as_bytes(params_json(params, scene_file)));
   writer.end_section();
-  writer.begin_section(world_sections::kNames);
-  writer.write(names.bytes());
-  writer.end_section();
+  if (!objects.empty()) {  // a section of no bytes has no page: the format has none
+    writer.begin_section(world_sections::kNames);
+    writer.write(names.bytes());
+    writer.end_section();
+  }
   if (extra_sections) {
     std::vector<Aabb> bounds;
     bounds.reserve(objects.size());
