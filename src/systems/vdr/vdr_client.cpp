@@ -159,6 +159,8 @@ struct VdrClient::Impl {
       const std::lock_guard lock(mutex);
       sent_at.push_back(net::Clock::now());
       stats.bytes_sent += 67;  // 55 bytes and the frame's 12
+      ++stats.requests;
+      stats.catch_up_requests += is_catch_up;
     }
     asio::post(io, [c = connection, payload = encode_view(v)] { c->send(uint8_t(VdrMessage::view), payload); });
   }

@@ -93,6 +93,7 @@ struct VdrFrameReport {
 
 struct VdrClientStats {
   uint64_t batches = 0, ops = 0, bytes_received = 0, bytes_sent = 0, frames = 0, unmodified = 0;
+  uint64_t requests = 0, catch_up_requests = 0;  // views sent, start-up's included; of them, catch-up
   std::vector<double> batch_ms;  // T_g per batch: request handed to the link → batch received
   uint32_t largest_span = 0;
 };
