@@ -39,6 +39,12 @@ struct Args {
   std::vector<double> at;        // --at X,Y,Z
 };
 
+// --json output. Object names and paths are the user's bytes: any that are not UTF-8 are shown
+// as U+FFFD, not refused.
+void print_json(const nlohmann::ordered_json& j) {
+  std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
+}
+
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -103,8 +109,7 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
                                 {"recall", recall}, {"min_recall", min_recall}, {"tightness", tightness},
                                 {"cells_failing", failing}, {"engine_seconds_per_cell", engine_s / n},
                                 {"truth_seconds_per_cell", truth_s / n}, {"cells", cells}};
-    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
-    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
+    print_json(j);
   } else {
     std::printf("check %s: %zu cells, recall %.4f (min %.4f, %llu cells below 1), tightness %.3f, %.3f s per cell\n",
                 engine.name().c_str(), cells.size(), recall, min_recall, (unsigned long long)failing, tightness,
@@ -136,8 +141,7 @@ void run_dov_compare(const Args& a, const World& world, const ViewCellPartition&
                                 {"engine_speedup", engine_speedup}, {"max_dov_difference", c.max_difference},
                                 {"largest_pixel_weight", c.largest_pixel_weight}, {"pairs", c.pairs},
                                 {"one_sided", c.one_sided}, {"one_sided_max_dov", c.one_sided_max_dov}};
-    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
-    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
+    print_json(j);
     return;
   }
   std::printf("dov cube maps at %d² on %llu %s cells, exact vs %s interleaved:\n"
@@ -273,8 +277,7 @@ void run_show(const Args& a, const World& world) {
                                       {"engine", pvs.engine()},
                                       {"conservative", pvs.conservative()},
                                       {"objects", objects}};
-    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
-    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
+    print_json(j);
     return;
   }
   std::printf("cell %u of %zu (%s, depth %u): box (%.3f, %.3f, %.3f) to (%.3f, %.3f, %.3f), %s\n", id,
@@ -305,8 +308,7 @@ void run_merge(const Args& a, const World& world) {
     nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else j["sizes"] = sizes_json(sizes);
-    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
-    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
+    print_json(j);
     return;
   }
   std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
@@ -374,8 +376,7 @@ void run_compute(const Args& a, const World& world) {
                                 {"seconds", compute_s}, {"cells_per_second", rate}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else if (!sharded) j["sizes"] = sizes_json(sizes);
-    // Names are the scene's bytes; any that are not UTF-8 are shown with U+FFFD, not refused.
-    std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
+    print_json(j);
     return;
   }
   std::printf("pvs %s: %zu %s cells (%llu solid, %llu skipped off the --along path); computed %llu (%llu resumed) in %.1f s, "
