@@ -29,6 +29,7 @@ namespace cellwalk {
 namespace {
 
 using test::box_mesh;
+using test::RayOracle;
 using test::TempDir;
 using visibility::CubeDepthBuffer;
 
@@ -420,117 +421,6 @@ TEST(BackfaceTest, HierarchyMatchesPerTriangleOnBunny) {
 }
 
 // ---- the oracle ---------------------------------------------------------------------------
-
-// The world's drawn geometry (level 0, decoded) and brute-force rays against it.
-class RayOracle {
- public:
-  explicit RayOracle(const World& world) {
-    for (ObjectId id = 0; id < world.object_count(); ++id) {
-      meshes_.push_back(world.decode_level(id, 0, world.read_level(id, 0)));
-      boxes_.push_back(bounds_of(meshes_.back()));
-      std::vector<double> cdf;
-      double total = 0;
-      const Mesh& m = meshes_.back();
-      for (size_t t = 0; t < m.triangle_count(); ++t) {
-        total += glm::length(glm::cross(m.positions[m.indices[3 * t + 1]] - m.positions[m.indices[3 * t]],
-                                        m.positions[m.indices[3 * t + 2]] - m.positions[m.indices[3 * t]]));
-        cdf.push_back(total);
-      }
-      cdfs_.push_back(std::move(cdf));
-    }
-  }
-
-  // The objects first hit by rays from `points` of the cell towards random points of every
-  // object's surface (rays_per_object per point and object not yet seen).
-  std::set<ObjectId> visible(const Aabb& cell, Random& rng, int points, int rays_per_object) const {
-    std::set<ObjectId> seen;
-    for (int i = 0; i < points; ++i) {
-      const Vec3 p = sample_point(cell, i, rng);
-      for (ObjectId target = 0; target < meshes_.size(); ++target)
-        for (int r = 0; r < rays_per_object && !seen.count(target); ++r)
-          if (auto hit = first_hit(p, surface_point(target, rng))) seen.insert(*hit);
-    }
-    return seen;
-  }
-
-  // The first object the segment from → to meets (to lies on a surface: up to it, inclusive).
-  std::optional<ObjectId> first_hit(const Vec3& from, const Vec3& to) const {
-    const glm::dvec3 o(from), d = glm::dvec3(to) - o;
-    double best = 1.0 + 1e-6;
-    std::optional<ObjectId> hit;
-    for (ObjectId id = 0; id < meshes_.size(); ++id) {
-      if (!segment_near_box(o, d, boxes_[id], best)) continue;
-      const Mesh& m = meshes_[id];
-      for (size_t t = 0; t < m.triangle_count(); ++t) {
-        const double at = intersect(o, d, m, t);
-        if (at > 1e-9 && at < best) best = at, hit = id;
-      }
-    }
-    return hit;
-  }
-
- private:
-  std::vector<Mesh> meshes_;
-  std::vector<Aabb> boxes_;
-  std::vector<std::vector<double>> cdfs_;
-
-  // Corners first, then face points, then interior points.
-  static Vec3 sample_point(const Aabb& c, int i, Random& rng) {
-    if (i < 8)
-      return {i & 1 ? c.max.x : c.min.x, i & 2 ? c.max.y : c.min.y, i & 4 ? c.max.z : c.min.z};
-    Vec3 p(rng.uniform(c.min.x, c.max.x), rng.uniform(c.min.y, c.max.y), rng.uniform(c.min.z, c.max.z));
-    if (i % 2 == 0) {
-      const int axis = i / 2 % 3;
-      p[axis] = (i / 6) % 2 ? c.max[axis] : c.min[axis];
-    }
-    return p;
-  }
-
-  Vec3 surface_point(ObjectId id, Random& rng) const {
-    const std::vector<double>& cdf = cdfs_[id];
-    const size_t t = std::min(cdf.size() - 1, size_t(std::lower_bound(cdf.begin(), cdf.end(),
-                                                                       rng.uniform() * cdf.back()) - cdf.begin()));
-    double u = rng.uniform(), v = rng.uniform();
-    if (u + v > 1) u = 1 - u, v = 1 - v;
-    const Mesh& m = meshes_[id];
-    const Vec3 a = m.positions[m.indices[3 * t]], b = m.positions[m.indices[3 * t + 1]],
-               c = m.positions[m.indices[3 * t + 2]];
-    return a + float(u) * (b - a) + float(v) * (c - a);
-  }
-
-  static bool segment_near_box(const glm::dvec3& o, const glm::dvec3& d, const Aabb& b, double limit) {
-    double t0 = 0, t1 = limit;
-    for (int a = 0; a < 3; ++a) {
-      const double lo = b.min[a] - 1e-4, hi = b.max[a] + 1e-4;
-      if (d[a] == 0) {
-        if (o[a] < lo || o[a] > hi) return false;
-        continue;
-      }
-      double n = (lo - o[a]) / d[a], f = (hi - o[a]) / d[a];
-      if (n > f) std::swap(n, f);
-      t0 = std::max(t0, n), t1 = std::min(t1, f);
-      if (t0 > t1) return false;
-    }
-    return true;
-  }
-
-  // Möller–Trumbore; the segment parameter of the hit, or -1. Edges count as hits (a ray
-  // grazing an edge sees it: the oracle leans towards "visible").
-  static double intersect(const glm::dvec3& o, const glm::dvec3& d, const Mesh& m, size_t t) {
-    const glm::dvec3 a(m.positions[m.indices[3 * t]]), b(m.positions[m.indices[3 * t + 1]]),
-        c(m.positions[m.indices[3 * t + 2]]);
-    const glm::dvec3 e1 = b - a, e2 = c - a, p = glm::cross(d, e2);
-    const double det = glm::dot(e1, p);
-    if (std::abs(det) < 1e-18) return -1;
-    const glm::dvec3 s = o - a;
-    const double u = glm::dot(s, p) / det;
-    if (u < -1e-9 || u > 1 + 1e-9) return -1;
-    const glm::dvec3 q = glm::cross(s, e1);
-    const double v = glm::dot(d, q) / det;
-    if (v < -1e-9 || u + v > 1 + 1e-9) return -1;
-    return glm::dot(e2, q) / det;
-  }
-};
 
 ConservativeParams only_shrinking() {
   ConservativeParams p;

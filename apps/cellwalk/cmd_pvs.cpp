@@ -413,6 +413,8 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str()->check(integer_in(0, 10000));
   cmd->add_option("--refine", a->options.refine_levels, "Conservative: refinement levels of each cell for occluder shrinking")->capture_default_str()->check(integer_in(0, 8));
+  auto* hole = cmd->add_option("--smallest-hole", a->options.smallest_hole, "Conservative: also find occluders in the space the surfaces enclose, keeping openings at least this wide open (metres; docs/surface-occluders.md)")->check(number_in(0, 1e6, true));
+  cmd->add_option("--smallest-occluder", a->options.smallest_occluder, "--smallest-hole: drop occluder boxes thinner than this in their two longer edges (metres)")->capture_default_str()->check(number_in(0, 1e6))->needs(hole);
   vlod_options.push_back(cmd->add_option("--lod-height", a->lod_height, "vLOD: image height in pixels the levels are chosen for (a walk may use this or less)")->capture_default_str()->check(number_in(16, 8192)));
   vlod_options.push_back(cmd->add_option("--lod-fov", a->lod_fov, "vLOD: vertical field of view, degrees, the levels are chosen for")->capture_default_str()->check(number_in(1, 170)));
   vlod_options.push_back(cmd->add_option("--lod-aspect", a->lod_aspect, "vLOD: image width / height the levels are chosen for")->capture_default_str()->check(number_in(0.05, 20)));
@@ -432,7 +434,7 @@ void register_pvs(CLI::App& root) {
                  ->delimiter(',')
                  ->check(number_in(-1e30, 1e30));
   show->excludes(at);
-  cmd->callback([cmd, a, vlod_options, disk_order, show, at] {
+  cmd->callback([cmd, a, vlod_options, disk_order, show, at, hole] {
     if (show->count() + at->count() > 0) {
       const std::string asked = show->count() > 0 ? "--show" : "--at";
       for (const CLI::Option* o : cmd->get_options())
@@ -446,6 +448,8 @@ void register_pvs(CLI::App& root) {
     for (const CLI::Option* o : vlod_options)
       if (o->count() > 0 && a->engine != "vlod")
         fail("pvs " + o->get_name(), "chooses the levels of the vlod engine only; give --engine vlod or leave it out");
+    if (hole->count() > 0 && a->engine != "conservative")
+      fail("pvs --smallest-hole", "finds occluders for the conservative engine only (they hold at level 0); give --engine conservative");
     a->options.dov_cubes = parse_dov_cubes(a->dov_cubes);
     a->options.lod_rule.lens = Lens{float(a->lod_fov / 57.29577951308232), float(a->lod_aspect), float(a->lod_height)};
     if (a->faithful_bound) a->options.lod_rule.formula = CellBoundFormula::kFaithful;

@@ -18,6 +18,8 @@
 #include "precompute/box_tree.hpp"
 #include "precompute/depth_buffer.hpp"
 #include "precompute/occluders.hpp"
+#include "precompute/surface_occluders.hpp"
+#include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
 namespace {
@@ -27,8 +29,13 @@ using visibility::CubeDepthBuffer;
 // How far a grounded occluder reaches below the floor (any depth beyond the world works).
 constexpr float kBelowFloor = 1.0e5f;
 
+// The object and component of occluders that have none.
+constexpr ObjectId kNoObject = std::numeric_limits<ObjectId>::max();
+constexpr uint32_t kNoComponent = std::numeric_limits<uint32_t>::max();
+
 // A box inside the solid of `object`, or inside the union of the solids of `object` and
-// `other` (a bridge between two boxes that touch). `grounded` is the box reaching down
+// `other` (a bridge between two boxes that touch), or (object = other = kNoObject) inside the
+// free voxels of `component` of the surface source. `grounded` is the box reaching down
 // without end when it stands on the floor (below which there is no geometry), else the box.
 // The objects' bounds are kept beside it: every cell reads them for each occluder it meets.
 struct Occluder {
@@ -38,6 +45,7 @@ struct Occluder {
   ObjectId other;
   Aabb object_bounds;
   Aabb other_bounds;
+  uint32_t component = kNoComponent;
 };
 
 // A segment between two points at or above the floor never passes below it, so a box whose
@@ -130,8 +138,17 @@ class ConservativeEngineImpl final : public VisibilityEngine {
       : world_(world), params_(params) {
     const auto start = std::chrono::steady_clock::now();
     occludees_.reserve(world.object_count());
-    for (ObjectId id = 0; id < world.object_count(); ++id)
+    Aabb everything;
+    for (ObjectId id = 0; id < world.object_count(); ++id) {
       occludees_.push_back(occludee_box(world.object(id).bounds));
+      everything.extend(occludees_.back());
+    }
+    if (params.smallest_hole > 0.0) {
+      if (params.occluder_margin)
+        fail("--smallest-hole", "surface occluders hold for level 0 only; use them with --engine conservative");
+      voxels_ = std::make_unique<visibility::SurfaceVoxels>(
+          everything, visibility::SurfaceOccluderParams{params.smallest_hole, params.smallest_occluder});
+    }
     derive_occluders();
     std::vector<Aabb> bounds;
     bounds.reserve(occluders_.size());
@@ -177,6 +194,7 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   std::vector<Aabb> occludees_;    // per object, the drawn geometry's box
   std::vector<Occluder> occluders_;  // in the tree's leaf order
   std::unique_ptr<visibility::BoxTree> tree_;  // over occluders_' grounded boxes
+  std::unique_ptr<visibility::SurfaceVoxels> voxels_;  // the surface source; null when off
   float floor_ = 0.0f;               // no decoded geometry lies below this height
   ConservativeStats stats_;
 
@@ -194,7 +212,7 @@ class ConservativeEngineImpl final : public VisibilityEngine {
   };
 
   float margin_of(ObjectId id, Pass& pass) const {
-    if (pass.margin.empty()) return 0.0f;
+    if (pass.margin.empty() || id == kNoObject) return 0.0f;
     if (pass.margin[id] < 0.0f) pass.margin[id] = std::max(0.0f, params_.occluder_margin(pass.cell, id));
     return pass.margin[id];
   }
@@ -221,8 +239,9 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     if (candidates.empty()) return;
     CubeDepthBuffer& depth = buffer_for(pass.buffers, size_t(level), box.center());
     for (ObjectId id : candidates) depth.demand(occludees_[id]);
-    if (params_.occluder_shrinking) render_occluders(box, depth, pass);
-    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, box, depth, pass); });
+    const Region region{box, voxels_ ? voxels_->components_near(box) : std::vector<uint32_t>{}};
+    if (params_.occluder_shrinking) render_occluders(region, depth, pass);
+    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, region, depth, pass); });
     if (level >= params_.refine_levels) {
       for (ObjectId id : candidates) pass.visible[id] = 1;
       return;
@@ -230,23 +249,33 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, pass);
   }
 
-  // Viewpoints must lie outside the occluder's solid for its crossing argument.
-  bool usable(const Occluder& o, const Aabb& region) const {
-    return !o.object_bounds.overlaps(region) && !o.other_bounds.overlaps(region);
+  // A region of viewpoints and the components of the surface source they may lie in.
+  struct Region {
+    Aabb box;
+    std::vector<uint32_t> components;  // sorted
+  };
+
+  // Viewpoints must lie outside the occluder's solid (or free component) for its crossing
+  // argument.
+  bool usable(const Occluder& o, const Region& region) const {
+    if (o.component != kNoComponent)
+      return !std::binary_search(region.components.begin(), region.components.end(), o.component);
+    return !o.object_bounds.overlaps(region.box) && !o.other_bounds.overlaps(region.box);
   }
 
   // Renders the shrunk occluders usable from `box` into the buffer, front to back. Groups of
   // occluders that can lower no wanted pixel (behind what is already rendered, or outside
   // every candidate's projection) are skipped whole: the buffer is the same as rendering all
   // (each pixel keeps the minimum), only cheaper.
-  void render_occluders(const Aabb& box, CubeDepthBuffer& depth, Pass& pass) const {
+  void render_occluders(const Region& region, CubeDepthBuffer& depth, Pass& pass) const {
+    const Aabb& box = region.box;
     const bool above_floor = box.min.y >= floor_;
     tree_->front_to_back(
         box, [&](const Aabb& group) { return depth.may_lower(group); },
         [&](uint32_t i) {
           const Occluder& o = occluders_[i];
           const Aabb shape = drawn(o, above_floor ? o.grounded : o.box, pass);
-          if (!shape.empty() && usable(o, box) && !too_small(shape, box.center(), params_.face_resolution) && depth.may_lower(shape))
+          if (!shape.empty() && usable(o, region) && !too_small(shape, box.center(), params_.face_resolution) && depth.may_lower(shape))
             render_shrunk(shape, box, depth);
         });
   }
@@ -260,15 +289,16 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     depth.add_occluder_for_cell(occluder, cell.size() * 0.5f);
   }
 
-  bool hidden(ObjectId id, const Aabb& cell, const CubeDepthBuffer& depth, Pass& pass) const {
+  bool hidden(ObjectId id, const Region& region, const CubeDepthBuffer& depth, Pass& pass) const {
     const Aabb& box = occludees_[id];
     if (params_.occluder_shrinking && depth.hidden(box)) return true;
-    return params_.corner_test && corner_test_hides(id, cell, pass);
+    return params_.corner_test && corner_test_hides(id, region, pass);
   }
 
   // HDoV §5.5.1 with each usable occluder within corner_test_radius of the cell whose box the
   // centre-to-centre segment meets (a cheap necessary condition), found through the tree.
-  bool corner_test_hides(ObjectId id, const Aabb& cell, Pass& pass) const {
+  bool corner_test_hides(ObjectId id, const Region& region, Pass& pass) const {
+    const Aabb& cell = region.box;
     const Aabb& box = occludees_[id];
     const Vec3 eye = cell.center(), target = box.center();
     const visibility::SegmentFilter segment(eye, target);
@@ -281,7 +311,7 @@ class ConservativeEngineImpl final : public VisibilityEngine {
         [&](uint32_t i) {
           const Occluder& o = occluders_[i];
           if (found || o.object == id || o.other == id || distance_between(o.box, cell) > params_.corner_test_radius ||
-              !usable(o, cell))
+              !usable(o, region))
             return;
           const Aabb shape = drawn(o, o.box, pass);
           found = !shape.empty() && visibility::segment_meets_box(eye, target, shape) &&
@@ -307,6 +337,7 @@ class ConservativeEngineImpl final : public VisibilityEngine {
           const Mesh mesh = world_.decode_level(ObjectId(id), 0, bytes);
           lowest[id] = bounds_of(mesh).min.y;
           per_object[id] = visibility::inscribed_boxes(mesh, op);
+          if (voxels_) voxels_->add_mesh(mesh);
         }
       } catch (...) {
         std::lock_guard lock(failure_mutex);
@@ -330,6 +361,21 @@ class ConservativeEngineImpl final : public VisibilityEngine {
         add_occluder(b, ObjectId(id), ObjectId(id));
     }
     add_bridges(per_object);
+    if (voxels_) add_surface_occluders();
+  }
+
+  void add_surface_occluders() {
+    voxels_->finish();
+    for (const visibility::SurfaceOccluder& o : voxels_->occluders()) {
+      add_occluder(o.box, kNoObject, kNoObject);
+      occluders_.back().component = o.component;
+    }
+    const visibility::SurfaceVoxelStats& s = voxels_->stats();
+    stats_.voxel_edge = s.voxel_edge;
+    stats_.voxels = s.voxels;
+    stats_.surface_voxels = s.surface_voxels;
+    stats_.free_components = s.components;
+    stats_.surface_boxes = s.boxes;
   }
 
   // One level of bridges between touching boxes (sweep along x over the boxes sorted by
@@ -354,8 +400,9 @@ class ConservativeEngineImpl final : public VisibilityEngine {
 
   void add_occluder(const Aabb& raw, ObjectId object, ObjectId other) {
     const Aabb box = pulled_in(raw);
+    auto bounds = [&](ObjectId id) { return id == kNoObject ? Aabb{} : world_.object(id).bounds; };
     occluders_.push_back({box, params_.grounded_occluders ? reaching_down(box, raw, floor_) : box, object, other,
-                          world_.object(object).bounds, world_.object(other).bounds});
+                          bounds(object), bounds(other)});
   }
 };
 

@@ -90,6 +90,8 @@ std::unique_ptr<VisibilityEngine> make_engine(const std::string& name, const Wor
   if (name == "conservative") {
     ConservativeParams params;
     params.refine_levels = options.refine_levels;
+    params.smallest_hole = options.smallest_hole;
+    params.smallest_occluder = options.smallest_occluder;
     return make_conservative_engine(world, params);
   }
   if (name == "vlod") return std::make_unique<VlodEngine>(world, options);

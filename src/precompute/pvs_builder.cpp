@@ -322,6 +322,9 @@ PvsRun make_pvs_run(const VisibilityEngine& engine, const std::string& cells_spe
                  " aimed=" + std::to_string(o.aimed_rays_per_object) + " seed=" + std::to_string(o.seed) +
                  " dov=" + std::to_string(o.dov_resolution) + " cubes=" + dov_cubes_name(o.dov_cubes) +
                  (run.conservative ? " refine=" + std::to_string(o.refine_levels) : "") +
+                 (o.smallest_hole > 0.0 ? " hole=" + std::to_string(o.smallest_hole) +
+                                              " occluder=" + std::to_string(o.smallest_occluder)
+                                        : "") +
                  (o.dov_midpoint_weights ? " midpoint" : "");
   run.threads = threads;
   if (!shard.empty()) parse_shard(shard, run.shard, run.shards);

@@ -47,6 +47,12 @@ struct ConservativeParams {
   double corner_test_radius = 200.0;
   // Threads deriving the occluders when the engine is made; 0 = all cores.
   int threads = 0;
+  // Occluders from the world's surfaces, however it is split into objects (issue 15,
+  // docs/surface-occluders.md): openings at least smallest_hole wide (metres) stay open;
+  // boxes thinner than smallest_occluder in their two longer edges are dropped. 0: off.
+  // Holds for level 0 only, so not with occluder_margin.
+  double smallest_hole = 0.0;
+  double smallest_occluder = 1.0;
   // vLOD §4: visibility computed on the levels drawn from the cell. The occluder boxes are
   // inscribed in level 0; a level whose surface lies within e of level 0 still holds each box
   // eroded by e, so every box of `object` is eroded by occluder_margin(cell, object) metres
@@ -63,6 +69,12 @@ struct ConservativeStats {
   uint64_t bridges = 0;           // boxes across two touching inscribed boxes
   double mean_fill = 0.0;         // mean over objects of largest box volume / object box volume
   double occluder_seconds = 0.0;  // to decode the meshes and derive the boxes
+  // The surface source (ConservativeParams::smallest_hole > 0); zero when off.
+  double voxel_edge = 0.0;            // metres
+  uint64_t voxels = 0;
+  uint64_t surface_voxels = 0;        // voxels a triangle meets
+  uint64_t free_components = 0;       // 26-connected components of the other voxels
+  uint64_t surface_boxes = 0;         // occluder boxes from them (part of occluder_boxes)
 };
 
 // Derives every object's occluders from level 0 of the world (decoded, so they are exact for

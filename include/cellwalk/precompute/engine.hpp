@@ -58,6 +58,11 @@ struct EngineOptions {
   // Conservative: how many times each cell is refined (halved along its long axes) for
   // occluder shrinking; more levels hide more and cost more (docs/conservative-visibility.md).
   int refine_levels = 3;
+  // Conservative: occluders from the world's surfaces (docs/surface-occluders.md): openings
+  // at least this wide (metres) stay open; 0 leaves the source off. Boxes thinner than
+  // smallest_occluder (metres) in their two longer edges are dropped.
+  double smallest_hole = 0.0;
+  double smallest_occluder = 1.0;
   // vLOD: the levels drawn from each cell (vLOD §2.2), on which its visibility is computed.
   visibility::CellLodRule lod_rule;
 };
