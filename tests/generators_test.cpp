@@ -16,6 +16,7 @@
 #include "cellwalk/core/process_memory.hpp"
 #include "cellwalk/scene/scene_file.hpp"
 #include "scene/shapes.hpp"
+#include "precompute/occluders.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -96,6 +97,13 @@ PlantParams small_plant(uint64_t seed = 1) {
   p.seed = seed;
   return p;
 }
+LevelParams small_level(uint64_t seed = 1) {
+  LevelParams p;
+  p.rooms_x = 3;
+  p.rooms_z = 2;
+  p.seed = seed;
+  return p;
+}
 GridParams small_grid(uint64_t seed = 1) {
   GridParams p;
   p.mesh = test::cgal_mesh("bunny00.off");
@@ -124,6 +132,10 @@ const std::map<std::string, std::function<Generate(uint64_t)>>& generators() {
       {"grid",
        [](uint64_t s) -> Generate {
          return [s](ObjectSink& k) { return generate_grid(small_grid(s), k); };
+       }},
+      {"level",
+       [](uint64_t s) -> Generate {
+         return [s](ObjectSink& k) { return generate_level(small_level(s), k); };
        }},
   };
   return all;
@@ -236,6 +248,38 @@ TEST(Generators, NavGraphConnectedAndClearOfObjects) {
     EXPECT_TRUE(connected(r->info.nav)) << name;
     EXPECT_FALSE(r->info.bounds.empty()) << name;
     expect_nav_clear(*r, name == "grid" ? 0.05f : 1.0f);
+  }
+}
+
+// ---- level --------------------------------------------------------------------------------
+
+// The carved faces of rooms and corridors (an L, a T and a box touching another at a corner
+// line) close the open space all together: welded by position, every edge is used by an even
+// number of triangles (a T-junction would leave an edge used once), and each face's normal
+// points into the open space, from which it is one-sided.
+TEST(Level, CarvedFacesCloseTheSpaceWithoutTJunctions) {
+  const std::vector<Aabb> spaces{{{0, 0, 0}, {4, 3, 4}}, {{4, 0, 1}, {7, 2.2f, 2.5f}}, {{5.5f, 0, 2.5f}, {7, 2.2f, 6}},
+                                 {{2, 0, 4}, {3, 2.5f, 5}}, {{7, 0, 6}, {9, 3, 8}}};
+  for (double tile : {0.0, 0.5, 1.3}) {
+    Mesh all;
+    size_t faces = 0;
+    for (const CarvedFace& f : carved_faces(spaces, tile)) {
+      ++faces;
+      const Aabb b = bounds_of(f.mesh);
+      const Vec3 inside = b.center() + 0.01f * f.normal, outside = b.center() - 0.01f * f.normal;
+      const auto open = [&](const Vec3& p) {
+        return std::any_of(spaces.begin(), spaces.end(), [&](const Aabb& s) { return s.contains(p); });
+      };
+      EXPECT_TRUE(open(inside) && !open(outside)) << "face " << faces << " at tile " << tile;
+      for (size_t t = 0; t < f.mesh.triangle_count(); ++t) {
+        const Vec3 a = f.mesh.positions[f.mesh.indices[3 * t]], b1 = f.mesh.positions[f.mesh.indices[3 * t + 1]],
+                   c = f.mesh.positions[f.mesh.indices[3 * t + 2]];
+        EXPECT_GT(glm::dot(glm::cross(b1 - a, c - a), f.normal), 0.0f) << "triangle wound against its face";
+      }
+      append(all, f.mesh);
+    }
+    EXPECT_TRUE(visibility::is_closed(all)) << "tile " << tile;
+    EXPECT_GT(faces, 20u);
   }
 }
 

@@ -167,6 +167,8 @@ TEST_F(HostileCli, HugeOrNegativeCountsAreRefusedAtOnce) {
   refused("generate plant --units-x 1000 --units-z 1000" + out, {"plant", "more than the most"});
   refused("pvs " + world_ + " --engine conservative --cells grid:0.001 -o " + dir.file("w.cww"), {"view cells", "1000000 cells"});
   refused("pvs " + world_ + " --cells octree:8:100:40 -o " + dir.file("w.cww"), {"octree depth"});
+  refused("pvs " + world_ + " --engine conservative --smallest-hole 0.0001 -o " + dir.file("w.cww"),
+          {"--smallest-hole", "voxels", "larger --smallest-hole"});
   refused("path " + world_ + " --fps 1e-30 --frames 5 -o " + dir.file("p.path"), {"--fps", "outside [0.1, 1000]"});
   refused("path " + world_ + " --frames 100000000 -o " + dir.file("p.path"), {"--frames"});
   EXPECT_FALSE(fs::exists(dir.file("c.cwscene")));
@@ -200,6 +202,10 @@ TEST_F(HostileCli, NonsenseCountsAndShardsAreRefused) {
   refused(pvs + " --points 0", {"--points"});
   refused(pvs + " --rays -1", {"--rays"});
   refused(pvs + " --engine conservative --refine -1", {"--refine"});
+  refused(pvs + " --engine conservative --smallest-hole nan", {"--smallest-hole"});
+  refused(pvs + " --engine conservative --smallest-hole 0", {"--smallest-hole"});
+  refused(pvs + " --engine sampling --smallest-hole 1", {"--smallest-hole", "conservative engine only"});
+  refused(pvs + " --engine conservative --smallest-occluder 1", {"--smallest-occluder", "--smallest-hole"});
   refused(pvs + " --check 1 --truth-points -5", {"--truth-points"});
   refused("compare " + world_ + " --path " + path_ + " -o " + dir.file("o") + " --images -1", {"--images"});
   refused("build " + scene_ + " -o " + dir.file("w.cww") + " --page-size 0", {"--page-size", "power of two"});

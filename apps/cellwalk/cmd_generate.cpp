@@ -207,6 +207,24 @@ void register_grid(CLI::App& generate, std::shared_ptr<Output> out) {
   });
 }
 
+void register_level(CLI::App& generate, std::shared_ptr<Output> out) {
+  auto p = std::make_shared<LevelParams>();
+  CLI::App* cmd = add_generator(
+      generate, "level", "Indoor level of single-sided faces: rooms joined by corridors, one object per face", out);
+  cmd->add_option("--rooms-x", p->rooms_x, "Rooms along X (10 m apart)")->capture_default_str()->check(integer_in(1, 1000));
+  cmd->add_option("--rooms-z", p->rooms_z, "Rooms along Z")->capture_default_str()->check(integer_in(1, 1000));
+  cmd->add_option("--tile", p->tile, "Faces are tiled into quads of at most this many metres (0: one quad a face)")
+      ->capture_default_str()
+      ->check(number_in(0, 1e3));
+  cmd->add_option("--crates", p->crates, "Closed crates on each room's floor")->capture_default_str()->check(integer_in(0, 100));
+  cmd->add_option("--seed", p->seed, "Random seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
+  cmd->callback([p, out] {
+    constexpr double kFacesPerRoom = 40;  // walls split by corridor mouths, floors, ceilings
+    refuse_too_many("level", double(p->rooms_x) * p->rooms_z * (kFacesPerRoom + p->crates));
+    write_world("level", *out, {}, 0, [&](ObjectSink& sink) { return generate_level(*p, sink); });
+  });
+}
+
 }  // namespace
 
 void register_generate(CLI::App& root) {
@@ -217,6 +235,7 @@ void register_generate(CLI::App& root) {
   register_stratified_city(*generate, out);
   register_plant(*generate, out);
   register_grid(*generate, out);
+  register_level(*generate, out);
 }
 
 }  // namespace cellwalk::app

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/precompute/conservative_visibility.hpp"
 #include "cellwalk/precompute/engine.hpp"
 #include "cellwalk/visibility/stored_vlod.hpp"
 #include "checks.hpp"
@@ -74,6 +75,30 @@ void print_sizes(const visibility::PvsSizes& s) {
               (unsigned long long)s.dov_bytes);
 }
 
+// What the surface source found (--smallest-hole), or null when the engine has none.
+nlohmann::ordered_json surface_json(const VisibilityEngine& engine) {
+  const ConservativeStats* s = conservative_stats(engine);
+  if (!s || s->voxel_edge <= 0.0) return nullptr;
+  return {{"voxel_edge", s->voxel_edge}, {"voxels", s->voxels}, {"surface_voxels", s->surface_voxels},
+          {"free_components", s->free_components}, {"boxes", s->surface_boxes}, {"setup_seconds", s->occluder_seconds}};
+}
+
+// The surface source's counts; or, when most objects are open and the source was not asked
+// for, the option that would find occluders among them.
+void print_surface(const VisibilityEngine& engine) {
+  const ConservativeStats* s = conservative_stats(engine);
+  if (s && s->voxel_edge <= 0.0 && s->closed_objects * 2 < s->objects)
+    warn("pvs --engine conservative",
+         std::to_string(s->closed_objects) + " of " + std::to_string(s->objects) +
+             " objects are closed, and only closed ones give occluders; give --smallest-hole METRES to find occluders "
+             "in the space the surfaces enclose together (docs/surface-occluders.md)");
+  if (!s || s->voxel_edge <= 0.0) return;
+  std::printf("  surface occluders: %.3f m voxels, %llu of %llu meet a surface, %llu free components, %llu boxes; "
+              "occluders derived in %.1f s\n",
+              s->voxel_edge, (unsigned long long)s->surface_voxels, (unsigned long long)s->voxels,
+              (unsigned long long)s->free_components, (unsigned long long)s->surface_boxes, s->occluder_seconds);
+}
+
 void run_check(const Args& a, const World& world, const VisibilityEngine& engine,
                const ViewCellPartition& partition) {
   visibility::CubeMapRenderer cube(world, a.gt_resolution);
@@ -109,8 +134,10 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
                                 {"recall", recall}, {"min_recall", min_recall}, {"tightness", tightness},
                                 {"cells_failing", failing}, {"engine_seconds_per_cell", engine_s / n},
                                 {"truth_seconds_per_cell", truth_s / n}, {"cells", cells}};
+    if (const auto surface = surface_json(engine); !surface.is_null()) j["surface_occluders"] = surface;
     print_json(j);
   } else {
+    print_surface(engine);
     std::printf("check %s: %zu cells, recall %.4f (min %.4f, %llu cells below 1), tightness %.3f, %.3f s per cell\n",
                 engine.name().c_str(), cells.size(), recall, min_recall, (unsigned long long)failing, tightness,
                 engine_s / n);
@@ -376,6 +403,7 @@ void run_compute(const Args& a, const World& world) {
                                 {"seconds", compute_s}, {"cells_per_second", rate}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else if (!sharded) j["sizes"] = sizes_json(sizes);
+    if (const auto surface = surface_json(*engine); !surface.is_null()) j["surface_occluders"] = surface;
     print_json(j);
     return;
   }
@@ -385,6 +413,7 @@ void run_compute(const Args& a, const World& world) {
               (unsigned long long)skipped, (unsigned long long)computed, (unsigned long long)resumed, compute_s, rate, setup_s);
   if (vlod) print_vlod_sizes(*vlod, a.disk_order);
   else if (!sharded) print_sizes(sizes);
+  print_surface(*engine);
   std::printf("  wrote %s\n", out.c_str());
 }
 

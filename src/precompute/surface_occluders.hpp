@@ -23,7 +23,7 @@ struct SurfaceOccluderParams {
   // Boxes whose second-longest edge is shorter than this (metres) are dropped.
   double smallest_occluder = 1.0;
   // The grid is refused (Error naming the size it needs) above this many voxels.
-  uint64_t max_voxels = uint64_t(1) << 31;
+  uint64_t max_voxels = uint64_t(1) << 30;
 };
 
 struct SurfaceOccluder {

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "cellwalk/scene/scene.hpp"
 
@@ -53,6 +54,30 @@ struct GridParams {
   uint64_t seed = 1;     // for per-instance colours
 };
 SceneInfo generate_grid(const GridParams& params, ObjectSink& sink);
+
+// An indoor level as game editors write one (issue 15): rooms on a grid (10 m slots, 4–8 m
+// rooms, 3–4 m high) joined by straight corridors (a spanning tree and some loops), carved out
+// of solid. Every floor, wall and ceiling is a single-sided face facing into the open space,
+// one object each, tiled into quads of at most `tile` metres: closed only all together.
+// `crates` closed boxes stand on each room's floor. The navigation graph runs from room
+// centres through every corridor at eye height.
+struct LevelParams {
+  int rooms_x = 5, rooms_z = 5;
+  double tile = 0.5;  // metres; 0: one quad per face
+  int crates = 3;
+  uint64_t seed = 1;
+};
+SceneInfo generate_level(const LevelParams& params, ObjectSink& sink);
+
+// One face of a carved level: a rectangle tiled into quads, and its normal.
+struct CarvedFace {
+  Mesh mesh;
+  Vec3 normal;
+};
+// The boundary of a union of axis-aligned open boxes as single-sided rectangles facing into
+// the open space: coplanar neighbours merged greedily into maximal rectangles, each tiled
+// into quads of at most `tile` metres (0: one quad).
+std::vector<CarvedFace> carved_faces(const std::vector<Aabb>& spaces, double tile);
 
 // Where the project keeps the meshes scripts/setup unpacks (data/cgal/meshes/...).
 std::string data_path(const std::string& relative);
