@@ -277,7 +277,11 @@ TEST(SurfaceOccluders, CorridorWithABendHidesTheFarRoom) {
   const Aabb cell = cuboid({1, 1, 1}, {2, 2, 2});
   EXPECT_TRUE(level.sees(cell, target, ConservativeParams{}));
   EXPECT_FALSE(level.sees(cell, target, with_surfaces(0.25)));
-  std::vector<Aabb> cells;
+  // A cell across the near room's wall: its viewpoints in the room use the void's boxes, those
+  // in the void the level's; one pass excluding both would hide nothing.
+  const Aabb across = cuboid({1, 1, 3.5f}, {2, 2, 4.5f});
+  EXPECT_FALSE(level.sees(across, target, with_surfaces(0.25)));
+  std::vector<Aabb> cells{across};
   for (float x : {0.5f, 2.5f}) cells.push_back(cuboid({x, 0.5f, 0.5f}, {x + 1, 1.5f, 1.5f}));
   cells.push_back(cuboid({6.1f, 0.5f, 5}, {6.9f, 1.5f, 6}));   // in the bend
   cells.push_back(cuboid({6, 1, 10}, {7, 2, 11}));           // in the far room

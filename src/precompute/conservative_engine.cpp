@@ -231,17 +231,32 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     return *buffers[level];
   }
 
+  // A region of viewpoints and the components of the surface source they may lie in, whose
+  // boxes are therefore no occluders for it.
+  struct Region {
+    Aabb box;
+    std::vector<uint32_t> components;  // sorted
+  };
+
   // Tests the candidates from `box`; those not hidden from it are visible when the box is a
   // leaf of the refinement, else they are tested from each child, minus those an earlier
   // child already showed to be visible.
   void refine(const Aabb& box, int level, std::vector<ObjectId> candidates, Pass& pass) const {
     std::erase_if(candidates, [&](ObjectId id) { return pass.visible[id] != 0; });
     if (candidates.empty()) return;
-    CubeDepthBuffer& depth = buffer_for(pass.buffers, size_t(level), box.center());
-    for (ObjectId id : candidates) depth.demand(occludees_[id]);
-    const Region region{box, voxels_ ? voxels_->components_near(box) : std::vector<uint32_t>{}};
-    if (params_.occluder_shrinking) render_occluders(region, depth, pass);
-    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, region, depth, pass); });
+    const std::vector<uint32_t> near = voxels_ ? voxels_->components_near(box) : std::vector<uint32_t>{};
+    if (near.size() <= 1) {
+      candidates = not_hidden(Region{box, near}, level, std::move(candidates), pass);
+    } else {
+      // Each viewpoint of the box lies in one of the components near it, and from there every
+      // other component's boxes are occluders: one pass per component, and an object is hidden
+      // from the box only when every pass hides it. (One pass excluding them all would lose
+      // every surface occluder for a box across a wall.)
+      std::vector<uint8_t> shown(occludees_.size(), 0);
+      for (uint32_t component : near)
+        for (ObjectId id : not_hidden(Region{box, {component}}, level, candidates, pass)) shown[id] = 1;
+      std::erase_if(candidates, [&](ObjectId id) { return !shown[id]; });
+    }
     if (level >= params_.refine_levels) {
       for (ObjectId id : candidates) pass.visible[id] = 1;
       return;
@@ -249,11 +264,15 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     for (const Aabb& child : children_of(box)) refine(child, level + 1, candidates, pass);
   }
 
-  // A region of viewpoints and the components of the surface source they may lie in.
-  struct Region {
-    Aabb box;
-    std::vector<uint32_t> components;  // sorted
-  };
+  // The candidates not hidden from every viewpoint of the region.
+  std::vector<ObjectId> not_hidden(const Region& region, int level, std::vector<ObjectId> candidates, Pass& pass) const {
+    CubeDepthBuffer& depth = buffer_for(pass.buffers, size_t(level), region.box.center());
+    for (ObjectId id : candidates) depth.demand(occludees_[id]);
+    if (params_.occluder_shrinking) render_occluders(region, depth, pass);
+    std::erase_if(candidates, [&](ObjectId id) { return hidden(id, region, depth, pass); });
+    return candidates;
+  }
+
 
   // Viewpoints must lie outside the occluder's solid (or free component) for its crossing
   // argument.
