@@ -18,6 +18,8 @@
 #include "core/progress.hpp"
 #include "precompute/dov_compare.hpp"
 #include "precompute/ground_truth.hpp"
+#include "precompute/embree_scene.hpp"
+#include "precompute/ray_cube_map.hpp"
 #include "precompute/pvs_builder.hpp"
 
 namespace cellwalk::app {
@@ -30,6 +32,7 @@ struct Args {
   std::vector<std::string> merge;
   uint64_t check = 0, dov_compare = 0;
   int gt_points = 16, gt_resolution = 1024, threads = 0;
+  std::string truth_cubes = "gl";
   EngineOptions options;
   double lod_height = 480, lod_fov = 60, lod_aspect = 4.0 / 3.0;
   bool faithful_bound = false;
@@ -101,14 +104,19 @@ void print_surface(const VisibilityEngine& engine) {
 
 void run_check(const Args& a, const World& world, const VisibilityEngine& engine,
                const ViewCellPartition& partition) {
-  visibility::CubeMapRenderer cube(world, a.gt_resolution);
+  std::unique_ptr<visibility::CubeMapSource> cube;
+  if (a.truth_cubes == "rays")
+    cube = std::make_unique<visibility::RayCubeMap>(world, std::make_shared<const visibility::EmbreeScene>(world),
+                                                    a.gt_resolution);
+  else
+    cube = std::make_unique<visibility::CubeMapRenderer>(world, a.gt_resolution);
   visibility::GroundTruthOptions gt;
   gt.points = a.gt_points;
   nlohmann::ordered_json cells = nlohmann::ordered_json::array();
   uint64_t found = 0, truth = 0, set = 0, failing = 0;
   double engine_s = 0, truth_s = 0, min_recall = 1.0;
   for (CellId c : visibility::cells_to_check(partition, a.check)) {
-    const visibility::CellCheck r = visibility::check_cell(engine, cube, partition.cell(c), gt);
+    const visibility::CellCheck r = visibility::check_cell(engine, *cube, partition.cell(c), gt);
     found += r.found;
     truth += r.truth_size;
     set += r.set_size;
@@ -131,6 +139,7 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
     nlohmann::ordered_json j = {{"engine", engine.name()}, {"conservative", engine.conservative()},
                                 {"cells_spec", a.cells}, {"checked", cells.size()},
                                 {"truth_points", a.gt_points + 8}, {"truth_resolution", a.gt_resolution},
+                                {"truth_cubes", a.truth_cubes},
                                 {"recall", recall}, {"min_recall", min_recall}, {"tightness", tightness},
                                 {"cells_failing", failing}, {"engine_seconds_per_cell", engine_s / n},
                                 {"truth_seconds_per_cell", truth_s / n}, {"cells", cells}};
@@ -438,6 +447,9 @@ void register_pvs(CLI::App& root) {
   cmd->add_option("--check", a->check, "Check the engine against ground truth on this many cells; write nothing")->check(integer_in(0, 1000000));
   cmd->add_option("--truth-points", a->gt_points, "Ground truth: random points per cell besides the 8 corners")->capture_default_str()->check(integer_in(0, 100000));
   cmd->add_option("--truth-resolution", a->gt_resolution, "Ground truth: cube-map face resolution")->capture_default_str()->check(integer_in(16, 4096));
+  cmd->add_option("--truth-cubes", a->truth_cubes, "Ground truth: ID cube maps rasterised by GL (gl), or cast as Embree rays through the pixel centres (rays: no cracks where faces of different objects meet; docs/surface-occluders.md)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"gl", "rays"}));
   cmd->add_option("--points", a->options.sample_points, "Sampling: random points per cell")->capture_default_str()->check(integer_in(1, 100000));
   cmd->add_option("--rays", a->options.rays_per_point, "Sampling: rays per point")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--aimed-rays", a->options.aimed_rays_per_object, "Sampling: rays per point at each object's box")->capture_default_str()->check(integer_in(0, 10000));

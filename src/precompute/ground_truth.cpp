@@ -11,7 +11,7 @@
 
 namespace cellwalk::visibility {
 
-std::vector<ObjectId> ground_truth_visible(const CubeMapRenderer& cube, const ViewCell& cell,
+std::vector<ObjectId> ground_truth_visible(const CubeMapSource& cube, const ViewCell& cell,
                                            const GroundTruthOptions& options) {
   Random rng(options.seed ^ (uint64_t(cell.id) * 0x9E3779B97F4A7C15ull));
   std::vector<Vec3> points = cell_corners(cell.box);
@@ -44,7 +44,7 @@ std::vector<CellId> cells_to_check(const ViewCellPartition& partition, uint64_t 
   return out;
 }
 
-CellCheck check_cell(const VisibilityEngine& engine, const CubeMapRenderer& cube, const ViewCell& cell,
+CellCheck check_cell(const VisibilityEngine& engine, const CubeMapSource& cube, const ViewCell& cell,
                      const GroundTruthOptions& options) {
   CellCheck check;
   check.cell = cell.id;

@@ -18,7 +18,7 @@ struct GroundTruthOptions {
 // Ascending ids of the objects that cover a pixel from some point. `cube` fixes the resolution
 // (1024² per face by default in `cellwalk pvs --check`). Not exact either: a sliver between
 // pixels or seen only from an unsampled point is missed, so it is a lower bound of the truth.
-std::vector<ObjectId> ground_truth_visible(const CubeMapRenderer& cube, const ViewCell& cell,
+std::vector<ObjectId> ground_truth_visible(const CubeMapSource& cube, const ViewCell& cell,
                                            const GroundTruthOptions& options);
 
 }  // namespace cellwalk::visibility
@@ -43,7 +43,7 @@ struct CellCheck {
 // `count` cells with sets (neither solid nor skipped) spread evenly over the ids (all of them when there are fewer).
 std::vector<CellId> cells_to_check(const ViewCellPartition& partition, uint64_t count);
 
-CellCheck check_cell(const VisibilityEngine& engine, const CubeMapRenderer& cube, const ViewCell& cell,
+CellCheck check_cell(const VisibilityEngine& engine, const CubeMapSource& cube, const ViewCell& cell,
                      const GroundTruthOptions& options);
 
 }  // namespace cellwalk::visibility
