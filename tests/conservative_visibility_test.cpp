@@ -30,6 +30,7 @@ namespace {
 
 using test::box_mesh;
 using test::RayOracle;
+using Scene = test::ObjectScene;
 using test::TempDir;
 using visibility::CubeDepthBuffer;
 
@@ -433,20 +434,6 @@ ConservativeParams only_corners() {
   return p;
 }
 
-struct Scene {
-  TempDir dir;
-  std::unique_ptr<World> world;
-  explicit Scene(const std::vector<Object>& objects) {
-    world = std::make_unique<World>(test::write_world(dir, objects, NavGraph{}));
-  }
-  std::vector<ObjectId> visible(const Aabb& cell, const ConservativeParams& params = {}) const {
-    return make_conservative_engine(*world, params)->compute(ViewCell{0, cell, 0, false}).objects;
-  }
-  bool sees(const Aabb& cell, ObjectId id, const ConservativeParams& params = {}) const {
-    const auto set = visible(cell, params);
-    return std::binary_search(set.begin(), set.end(), id);
-  }
-};
 
 const Aabb kCell = box({-1, 1, -1}, {1, 3, 1});
 const Aabb kTarget = box({12, 1, -0.5f}, {13, 2, 0.5f});

@@ -21,6 +21,7 @@ namespace {
 using test::box_mesh;
 using test::quad_mesh;
 using test::RayOracle;
+using Level = test::ObjectScene;
 using test::TempDir;
 
 Aabb cuboid(Vec3 lo, Vec3 hi) { return {lo, hi}; }
@@ -93,20 +94,6 @@ ConservativeParams with_surfaces(double hole, double smallest_occluder = 0.25) {
   return p;
 }
 
-struct Level {
-  TempDir dir;
-  std::unique_ptr<World> world;
-  explicit Level(const std::vector<Object>& objects) {
-    world = std::make_unique<World>(test::write_world(dir, objects, NavGraph{}));
-  }
-  std::vector<ObjectId> visible(const Aabb& cell, const ConservativeParams& params) const {
-    return make_conservative_engine(*world, params)->compute(ViewCell{0, cell, 0, false}).objects;
-  }
-  bool sees(const Aabb& cell, ObjectId id, const ConservativeParams& params) const {
-    const auto set = visible(cell, params);
-    return std::binary_search(set.begin(), set.end(), id);
-  }
-};
 
 // Every object the oracle's rays from `points` points of each cell reach must be in the set;
 // returns (set sizes, seen sizes) summed over the cells.

@@ -123,6 +123,7 @@ std::string write_world(const TempDir& dir, const std::vector<Object>& objects, 
 #include <set>
 
 #include "cellwalk/core/random.hpp"
+#include "cellwalk/precompute/conservative_visibility.hpp"
 #include "cellwalk/store/world.hpp"
 
 namespace cellwalk::test {
@@ -235,6 +236,22 @@ class RayOracle {
     const double v = glm::dot(d, q) / det;
     if (v < -1e-9 || u + v > 1 + 1e-9) return -1;
     return glm::dot(e2, q) / det;
+  }
+};
+
+// A world written from `objects` (as write_world) and what the conservative engine finds
+// visible from a cell of it.
+struct ObjectScene {
+  TempDir dir;
+  std::unique_ptr<World> world;
+  explicit ObjectScene(const std::vector<Object>& objects)
+      : world(std::make_unique<World>(write_world(dir, objects, NavGraph{}))) {}
+  std::vector<ObjectId> visible(const Aabb& cell, const ConservativeParams& params = {}) const {
+    return make_conservative_engine(*world, params)->compute(ViewCell{0, cell, 0, false}).objects;
+  }
+  bool sees(const Aabb& cell, ObjectId id, const ConservativeParams& params = {}) const {
+    const auto set = visible(cell, params);
+    return std::binary_search(set.begin(), set.end(), id);
   }
 };
 
