@@ -201,7 +201,9 @@ void get_positions(ByteReader& r, const Header& h, Mesh& mesh) {
   for (size_t i = 0; i < q.size(); ++i) {
     // Values above 2^bits - 1 only come from damage; clamping keeps positions in the box.
     const Vec3 v = glm::min(Vec3(q[i].x, q[i].y, q[i].z), Vec3(steps));
-    mesh.positions[i] = h.box.min + v * step;
+    // The top step is the box's max exactly (min + steps · step may round past or short of
+    // it): faces of two objects that meet where both boxes end then meet without a gap.
+    mesh.positions[i] = glm::mix(h.box.min + v * step, h.box.max, glm::equal(v, Vec3(steps)));
   }
 }
 
