@@ -60,6 +60,9 @@ EmbreeScene::EmbreeScene(const World& world)
   if (!device_) fail("embree", "cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
   scene_ = rtcNewScene(device_);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+  // Watertight ray–triangle tests: a ray through an edge two triangles share hits one of them
+  // (without it, rays passed between the faces of levels, docs/surface-occluders.md).
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
   std::mutex attach;
   tbb::parallel_for(size_t(0), world.object_count(), [&](size_t i) {
     const auto id = static_cast<ObjectId>(i);
