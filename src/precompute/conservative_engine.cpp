@@ -273,7 +273,6 @@ class ConservativeEngineImpl final : public VisibilityEngine {
     return candidates;
   }
 
-
   // Viewpoints must lie outside the occluder's solid (or free component) for its crossing
   // argument.
   bool usable(const Occluder& o, const Region& region) const {
