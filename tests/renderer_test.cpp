@@ -633,3 +633,44 @@ TEST(WritePng, FailureNamesTheFileAndKeepsTheOldOne) {
 
 }  // namespace
 }  // namespace cellwalk
+
+namespace cellwalk {
+namespace {
+
+// Run only from the test below, in a fresh process: makes the first headless context of the
+// process with the rasteriser CELLWALK_TEST_RASTERISER names and prints the thread count.
+TEST(GlContextThreads, DISABLED_CountThreadsAfterTheFirstContext) {
+  const char* mode = std::getenv("CELLWALK_TEST_RASTERISER");
+  ASSERT_NE(mode, nullptr);
+  auto context = GlContext::headless(std::string(mode) == "calling" ? Rasteriser::kCallingThread : Rasteriser::kWorkerThreads);
+  size_t threads = 0;
+  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) ++threads;
+  std::printf("threads %zu\n", threads);
+}
+
+size_t threads_with(const std::string& mode) {
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  const std::string command = "env -u LP_NUM_THREADS CELLWALK_TEST_RASTERISER=" + mode + " EGL_PLATFORM=surfaceless '" + self +
+                              "' --gtest_also_run_disabled_tests --gtest_filter=GlContextThreads.DISABLED_CountThreadsAfterTheFirstContext 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  EXPECT_NE(pipe, nullptr);
+  if (!pipe) return 0;
+  char line[512];
+  size_t threads = 0;
+  while (std::fgets(line, sizeof line, pipe)) std::sscanf(line, "threads %zu", &threads);
+  EXPECT_EQ(pclose(pipe), 0);
+  return threads;
+}
+
+// A budgeted walk's context rasterises on the calling thread: llvmpipe starts no rasteriser
+// threads (docs/design.md, Memory: their bins made the process's peak vary by up to 18 MiB
+// under CPU load).
+TEST(GlContextThreads, CallingThreadRasteriserStartsNoWorkers) {
+  const size_t workers = threads_with("workers"), calling = threads_with("calling");
+  ASSERT_GT(calling, 0u);
+  EXPECT_LT(calling, workers) << "llvmpipe started the same threads with LP_NUM_THREADS=0";
+  std::printf("threads after the first context: %zu with worker rasterisers, %zu on the calling thread\n", workers, calling);
+}
+
+}  // namespace
+}  // namespace cellwalk

@@ -105,7 +105,7 @@ void register_compare(CLI::App& root) {
     World world(args->world, args->world_options());
     const CameraPath path = args->read_checked_path(world);
     const OutputFolder folder = args->make_output_folder();
-    auto context = GlContext::headless();
+    auto context = GlContext::headless(args->rasteriser());
     const RunBudget budget = args->run_budget(path.frames.size());
     std::vector<std::string> labels;
     std::vector<NamedFidelity> runs;

@@ -92,7 +92,7 @@ void register_walk(CLI::App& root) {
     refuse_same_files({args->world, args->path}, {args->out});
     const OutputFolder folder = args->make_output_folder();
     // The baseline is measured before the world and the path are read: they are charged.
-    auto context = GlContext::headless();
+    auto context = GlContext::headless(args->rasteriser());
     const uint64_t baseline = measure_baseline(args->lens.render_settings());
     const World world(args->world, args->world_options());
     const CameraPath path = args->read_checked_path(world);

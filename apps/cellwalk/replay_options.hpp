@@ -12,6 +12,7 @@
 
 #include "cellwalk/core/error.hpp"
 
+#include "cellwalk/render/renderer.hpp"
 #include "cellwalk/runtime/run_budget.hpp"
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/strategy/strategy.hpp"
@@ -45,7 +46,7 @@ struct ReplayOptions {
         ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
         ->capture_default_str();
     cmd.add_option("-o,--output", out, "Output folder")->capture_default_str();
-    cmd.add_option("--budget", budget_mib, "Memory budget, MiB (0 = none): all that grows with the world and the path; walk holds the process to it plus the baseline it reports (under CPU load not yet always: docs/design.md, Memory)")
+    cmd.add_option("--budget", budget_mib, "Memory budget, MiB (0 = none): all that grows with the world and the path; walk holds the process to it plus the baseline it reports, and rasterises on its own thread (docs/design.md, Memory)")
         ->capture_default_str()
         ->check(number_in(0, 1 << 24));
     cmd.add_option("--eta", eta, "hdov-vsc: DoV threshold η (HDoV thesis §5.3)")->capture_default_str()->check(number_in(0, 1));
@@ -78,6 +79,9 @@ struct ReplayOptions {
   OutputFolder make_output_folder() const { return OutputFolder(out); }
   // Checks every --strategy's name and settings before any run, so a typo fails at once.
   void check_strategies() const;
+  // A run held to a budget rasterises on its own thread (renderer.hpp, Rasteriser).
+  Rasteriser rasteriser() const { return budget_mib > 0 ? Rasteriser::kCallingThread : Rasteriser::kWorkerThreads; }
+
   // The budget of a run over `frames` frames: --budget is the process's (run_budget.hpp).
   RunBudget run_budget(size_t frames) const {
     const std::optional<uint64_t> gpu =

@@ -6,6 +6,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <cstdlib>
 #include <mutex>
 #include <string>
 #include <string_view>
@@ -42,8 +43,9 @@ std::string egl_error_text() {
 // it is shared and terminated when the last headless context goes.
 class SurfacelessDisplay {
  public:
-  static EGLDisplay acquire() {
+  static EGLDisplay acquire(Rasteriser rasteriser) {
     std::lock_guard lock(mutex_);
+    if (users_ == 0 && rasteriser == Rasteriser::kCallingThread) setenv("LP_NUM_THREADS", "0", /*overwrite=*/0);
     if (users_ == 0) display_ = open();
     ++users_;
     return display_;
@@ -77,7 +79,7 @@ class SurfacelessDisplay {
 
 class EglContext : public GlContext {
  public:
-  EglContext() : display_(SurfacelessDisplay::acquire()) {
+  explicit EglContext(Rasteriser rasteriser) : display_(SurfacelessDisplay::acquire(rasteriser)) {
     try {
       create();
     } catch (...) {
@@ -140,8 +142,8 @@ class EglContext : public GlContext {
 
 }  // namespace
 
-std::unique_ptr<GlContext> GlContext::headless() {
-  return std::make_unique<EglContext>();
+std::unique_ptr<GlContext> GlContext::headless(Rasteriser rasteriser) {
+  return std::make_unique<EglContext>(rasteriser);
 }
 
 }  // namespace cellwalk

@@ -17,13 +17,21 @@
 
 namespace cellwalk {
 
+// Where llvmpipe rasterises. Its worker threads bin every frame's triangles in heap blocks
+// whose resident size under CPU load varies by up to ~18 MiB between runs (docs/design.md,
+// Memory), so a run held to a memory budget rasterises on the calling thread instead
+// (LP_NUM_THREADS=0, unless the user set it). Measured no slower at a walk's sizes.
+enum class Rasteriser { kWorkerThreads, kCallingThread };
+
 // A current OpenGL 4.5 core context. Creating one makes it current on the calling thread.
 class GlContext {
  public:
   virtual ~GlContext() = default;
   // Headless: EGL with the surfaceless platform (Mesa llvmpipe without a GPU or X server).
   // Throws Error saying what is missing (e.g. Mesa's EGL) when no context can be made.
-  static std::unique_ptr<GlContext> headless();
+  // `rasteriser` takes effect for the process's first headless context (Mesa reads it when
+  // the display opens).
+  static std::unique_ptr<GlContext> headless(Rasteriser rasteriser = Rasteriser::kWorkerThreads);
   virtual std::string renderer_name() const = 0;  // GL_RENDERER
 };
 
