@@ -15,7 +15,7 @@
 namespace cellwalk {
 
 std::vector<std::string> strategy_names() {
-  return {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]",
+  return {"brute", "ground-truth", "lod[:px=P]", "conv", "hdov-vsc", "hdov-pb", "review[-nc|-np|-box][:key=value,...]", "visual[:key=value,...]",
           "vlod[:key=value,...]", "stratified[:key=value,...]",
           "lichiang[:key=value,...]", "pvs-stream[:key=value,...]", "vdr[:key=value,...]"};
 }
@@ -33,6 +33,7 @@ namespace {
 void check_strategy_name(const std::string& name) {
   for (const char* plain : {"brute", "ground-truth", "conv", "hdov-vsc", "hdov-pb"})
     if (name == plain) return;
+  if (is_lod_strategy_name(name)) return void(parse_lod_strategy_name(name));
   if (is_review_strategy_name(name)) return void(parse_review_strategy_name(name));
   if (is_visual_strategy_name(name)) return void(parse_visual_strategy_name(name));
   if (is_vlod_strategy_name(name)) return void(parse_vlod_strategy_name(name));
@@ -47,6 +48,7 @@ std::unique_ptr<Strategy> make_strategy(const std::string& name, const World& wo
                                         const StrategyOptions& options) {
   if (name == "brute") return std::make_unique<BruteStrategy>(world, options, true);
   if (name == "ground-truth") return std::make_unique<BruteStrategy>(world, options, false);
+  if (is_lod_strategy_name(name)) return std::make_unique<BruteStrategy>(world, options, true, parse_lod_strategy_name(name));
   if (name == "conv") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kConv);
   if (name == "hdov-vsc") return std::make_unique<SceneTreeStrategy>(world, options, SceneTreeStrategy::Traversal::kVsc);
   if (is_review_strategy_name(name)) return std::make_unique<ReviewStrategy>(world, parse_review_strategy_name(name), options);
