@@ -3,15 +3,18 @@
 // through OBJ and glTF, and the broken-file corpus in tests/data/broken.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/scene/import.hpp"
+#include "cellwalk/scene/scene_file.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk {
@@ -183,8 +186,11 @@ TEST(ImportObj, AssimpModels) {
   const Object colored = import_model(assimp_model("OBJ/cube_with_vertexcolors.obj")).at(0);
   EXPECT_EQ(colored.mesh.colors.size(), 8u);
   EXPECT_EQ(colored.mesh.triangle_count(), 12u);
-  const Object spider = import_model(assimp_model("OBJ/spider.obj")).at(0);  // many groups
-  EXPECT_GT(spider.mesh.triangle_count(), 1000u);
+  size_t spider_triangles = 0;
+  const std::vector<Object> spider = import_model(assimp_model("OBJ/spider.obj"));  // many groups
+  for (const Object& part : spider) spider_triangles += part.mesh.triangle_count();
+  EXPECT_GT(spider_triangles, 1000u);
+  EXPECT_GT(spider.size(), 10u);
 }
 
 TEST(ImportObj, ReferenceFormsAndNegativeIndices) {
@@ -200,8 +206,8 @@ struct GltfCounts {
   size_t objects = 0, triangles = 0;
 };
 
-// An oracle independent of tinygltf: reads the GLB's JSON chunk and sums, over the mesh nodes
-// of the default scene, the index counts of triangle-list primitives.
+// An oracle independent of tinygltf: reads the GLB's JSON chunk and counts, over the mesh nodes
+// of the default scene, the triangle-list primitives with triangles and their index counts.
 GltfCounts glb_oracle(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   std::vector<char> b((std::istreambuf_iterator<char>(in)), {});
@@ -215,16 +221,17 @@ GltfCounts glb_oracle(const std::string& path) {
     stack.pop_back();
     for (int child : node.value("children", std::vector<int>{})) stack.push_back(child);
     if (!node.contains("mesh")) continue;
-    size_t triangles = 0;
-    for (const auto& p : doc["meshes"][node["mesh"].get<int>()]["primitives"])
-      if (p.value("mode", 4) == 4) triangles += doc["accessors"][p["indices"].get<int>()]["count"].get<size_t>() / 3;
-    c.objects += triangles > 0;
-    c.triangles += triangles;
+    for (const auto& p : doc["meshes"][node["mesh"].get<int>()]["primitives"]) {
+      if (p.value("mode", 4) != 4) continue;
+      const size_t triangles = doc["accessors"][p["indices"].get<int>()]["count"].get<size_t>() / 3;
+      c.objects += triangles > 0;
+      c.triangles += triangles;
+    }
   }
   return c;
 }
 
-TEST(ImportGltf, CylinderEngineGivesOneObjectPerMeshNode) {
+TEST(ImportGltf, CylinderEngineGivesOneObjectPerPrimitive) {
   const std::string path = assimp_model("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
   const GltfCounts expected = glb_oracle(path);
   std::vector<Object> objects = import_model(path, 100);
@@ -289,9 +296,8 @@ TEST(Export, BunnyRoundTripsThroughObjGltfAndGlb) {
     std::vector<Object> back = import_model(path);
     ASSERT_EQ(back.size(), 1u) << name;
     expect_same_geometry(bunny, back[0]);
-    // OBJ names its one object after the file; glTF keeps the node name.
-    const bool obj = format_of(path) == ModelFormat::kObj;
-    EXPECT_EQ(back[0].name, obj ? "bunny" : "bunny00") << name;
+    // OBJ keeps the "o" name, glTF the node name.
+    EXPECT_EQ(back[0].name, "bunny00") << name;
   }
   EXPECT_TRUE(std::filesystem::exists(dir.file("bunny.bin")));
   for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
@@ -355,8 +361,10 @@ TEST(ImportErrors, TextErrorsNameTheLine) {
 
 // A GLB of one triangle: positions, normals and indices in one binary chunk, accessors 0, 1
 // and 2; `index_type` is the index accessor's component type, `node` the one node.
+// `patch` is merged into the document last (RFC 7386: an array given replaces the whole array).
 std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index_type,
-                                  const nlohmann::json& node = {{"mesh", 0}}) {
+                                  const nlohmann::json& node = {{"mesh", 0}},
+                                  const nlohmann::json& patch = nlohmann::json::object()) {
   const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
   std::string bin(reinterpret_cast<const char*>(positions), 36);
   bin.append(reinterpret_cast<const char*>(normals.data()), 36);
@@ -367,7 +375,7 @@ std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index
   else if (index_type >= 5124) append(std::array<int32_t, 3>{0, 1, 2});
   else if (index_type >= 5122) append(std::array<int16_t, 4>{0, 1, 2, 0});
   else append(std::array<int8_t, 4>{0, 1, 2, 0});
-  const nlohmann::json doc = {
+  nlohmann::json doc = {
       {"asset", {{"version", "2.0"}}},
       {"scene", 0},
       {"scenes", {{{"nodes", {0}}}}},
@@ -382,6 +390,7 @@ std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index
        {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
         {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
         {{"bufferView", 2}, {"componentType", index_type}, {"count", 3}, {"type", "SCALAR"}}}}};
+  doc.merge_patch(patch);
   std::string json = doc.dump();
   json.append((4 - json.size() % 4) % 4, ' ');
   std::string glb(12, '\0');
@@ -503,7 +512,185 @@ TEST(ImportErrors, EveryBrokenFileGivesAnErrorNamingIt) {
   EXPECT_GE(files, 50u);
 }
 
+// --- objects: OBJ groups, glTF primitives, patches -------------------------------------------
+
+// Issue 16: an OBJ with 71 groups imported as 1 object. Each group is an object now, a group
+// named again takes more faces, and "o A" + "g b" names the group "A/b".
+TEST(ImportObj, EveryGroupIsAnObject) {
+  std::string text;
+  for (int g = 0; g < 71; ++g) {
+    text += "g part" + std::to_string(g) + "\n";
+    text += "v " + std::to_string(g) + " 0 0\nv " + std::to_string(g) + " 1 0\nv " + std::to_string(g) + " 0 1\nf -3 -2 -1\n";
+  }
+  text += "g part3\nf 1 2 3\ng\no Named\ng sub\nf 4 5 6\n";
+  const std::vector<Object> objects = parse_model(ModelFormat::kObj, bytes_of(text), "groups.obj", 7);
+  ASSERT_EQ(objects.size(), 72u);
+  for (int g = 0; g < 71; ++g) {
+    EXPECT_EQ(objects[g].name, "part" + std::to_string(g));
+    EXPECT_EQ(objects[g].id, 7u + g);
+    EXPECT_EQ(objects[g].mesh.triangle_count(), g == 3 ? 2u : 1u);
+    EXPECT_EQ(objects[g].bounds.min.x, g == 3 ? 0.0f : float(g));
+  }
+  EXPECT_EQ(objects[71].name, "Named/sub");
+  EXPECT_EQ(objects[71].mesh.positions.front(), Vec3(1, 0, 0));
+  // No group at all: one object named after the file.
+  EXPECT_EQ(parse_model(ModelFormat::kObj, bytes_of("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "dir/plain.obj").at(0).name, "plain");
+}
+
+// Materials: an object's colour is its material's Kd; an object of several materials gets
+// each vertex its material's colour (a vertex shared by two materials is split).
+TEST(ImportObj, MaterialColoursFromTheMtlFileBesideIt) {
+  TempDir dir;
+  std::ofstream(dir.file("m.mtl")) << "newmtl red\nKd 1 0 0\n# blue\nnewmtl blue one\nKd 0 0 1.0\n";
+  std::ofstream(dir.file("m.obj")) << "mtllib m.mtl missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
+                                      "g a\nusemtl red\nf 1 2 3\ng b\nf 2 4 3\nusemtl blue one\nf 1 2 3\n";
+  const std::vector<Object> objects = import_model(dir.file("m.obj"));
+  ASSERT_EQ(objects.size(), 2u);
+  EXPECT_EQ(objects[0].color, rgba8(255, 0, 0));
+  EXPECT_TRUE(objects[0].mesh.colors.empty());
+  EXPECT_EQ(objects[1].color, rgba8(255, 0, 0));
+  ASSERT_EQ(objects[1].mesh.colors.size(), 6u);  // vertices 2 and 3 in both materials
+  EXPECT_EQ(objects[1].mesh.colors[objects[1].mesh.indices[0]], rgba8(255, 0, 0));
+  EXPECT_EQ(objects[1].mesh.colors[objects[1].mesh.indices[3]], rgba8(0, 0, 255));
+  // From memory, nothing beside it is read: the default colour.
+  EXPECT_EQ(parse_model(ModelFormat::kObj, test::slurp(dir.file("m.obj")), "m.obj").at(0).color, Object{}.color);
+  // A real file: the spider's 19 groups, its body in HLeibTex (Kd 0.690196 0.639216 0.615686).
+  const std::vector<Object> spider = import_model(assimp_model("OBJ/spider.obj"));
+  ASSERT_EQ(spider.size(), 19u);
+  const auto body = std::find_if(spider.begin(), spider.end(), [](const Object& o) { return o.name == "HLeib01"; });
+  ASSERT_NE(body, spider.end());
+  EXPECT_EQ(body->color, rgba8(176, 163, 157));
+}
+
+// One object per triangle primitive, each with its node's transform and its material's colour.
+TEST(ImportGltf, EachPrimitiveIsAnObjectWithItsTransformAndColour) {
+  const nlohmann::json patch = {
+      {"scenes", {{{"nodes", {0, 1}}}}},
+      {"nodes", {{{"mesh", 0}, {"translation", {10, 0, 0}}}, {{"mesh", 0}, {"name", "lifted"}, {"translation", {0, 5, 0}}}}},
+      {"materials", {{{"pbrMetallicRoughness", {{"baseColorFactor", {1, 0, 0, 1}}}}}, {{"pbrMetallicRoughness", {{"baseColorFactor", {0, 1, 0, 1}}}}}}},
+      {"meshes",
+       {{{"primitives",
+          {{{"attributes", {{"POSITION", 0}}}, {"indices", 2}, {"material", 0}},
+           {{"attributes", {{"POSITION", 0}}}, {"indices", 2}, {"material", 1}},
+           {{"attributes", {{"POSITION", 0}}}, {"indices", 2}, {"mode", 1}}}}}}}};  // lines: skipped
+  const std::vector<Object> objects =
+      parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5123, {}, patch), "two.glb");
+  ASSERT_EQ(objects.size(), 4u);
+  EXPECT_EQ(objects[0].color, rgba8(255, 0, 0));
+  EXPECT_EQ(objects[1].color, rgba8(0, 255, 0));
+  EXPECT_EQ(objects[0].bounds.min, Vec3(10, 0, 0));
+  EXPECT_EQ(objects[3].bounds.min, Vec3(0, 5, 0));
+  EXPECT_EQ(objects[2].name, "lifted/0");
+  EXPECT_EQ(objects[3].name, "lifted/1");
+}
+
+// Compressed glTF once failed with "Invalid `byteLength'" or "accessor[0] invalid bufferView".
+TEST(ImportGltf, RequiredExtensionsNotReadAreNamed) {
+  const std::array<float, 9> up = {0, 0, 1, 0, 0, 1, 0, 0, 1};
+  for (const char* ext : {"EXT_meshopt_compression", "KHR_draco_mesh_compression", "EXT_future_thing"}) {
+    const std::string message = gltf_error(triangle_glb(up, 5123, {{"mesh", 0}}, {{"extensionsUsed", {ext}}, {"extensionsRequired", {ext}}}));
+    EXPECT_EQ(message.rfind(std::string("test.glb: requires the glTF extension ") + ext + ", which cellwalk cannot read yet; ", 0), 0u) << message;
+  }
+  // Quantized attributes are read; an extension only used, not required, is ignored.
+  EXPECT_EQ(parse_model(ModelFormat::kGltf,
+                        triangle_glb(up, 5123, {{"mesh", 0}}, {{"extensionsUsed", {"KHR_mesh_quantization", "EXT_x"}}, {"extensionsRequired", {"KHR_mesh_quantization"}}}),
+                        "q.glb").size(), 1u);
+}
+
+// A 2-million-triangle height field (1001 × 1001 vertices) into patches of at most 16,384
+// triangles: each in bounds, together exactly the mesh's triangles, vertices and normals.
+TEST(ImportPatches, LargeMeshIsPartitionedIntoBoundedPatches) {
+  constexpr uint32_t kSide = 1001;
+  Object big;
+  big.id = 4;
+  big.name = "scan";
+  for (uint32_t z = 0; z < kSide; ++z)
+    for (uint32_t x = 0; x < kSide; ++x) big.mesh.positions.emplace_back(float(x), std::sin(x * 0.01f) * std::cos(z * 0.013f), float(z));
+  for (uint32_t z = 0; z + 1 < kSide; ++z)
+    for (uint32_t x = 0; x + 1 < kSide; ++x) {
+      const uint32_t v = z * kSide + x;
+      big.mesh.indices.insert(big.mesh.indices.end(), {v, v + kSide, v + 1, v + 1, v + kSide, v + kSide + 1});
+    }
+  compute_normals(big.mesh);
+  const Mesh original = big.mesh;
+  ASSERT_EQ(original.triangle_count(), 2000000u);
+  // A triangle as its three original vertex indices, rotated to start at the smallest.
+  const auto key = [](uint32_t a, uint32_t b, uint32_t c) {
+    while (a > b || a > c) std::tie(a, b, c) = std::tuple(b, c, a);
+    return uint64_t(a) << 42 | uint64_t(b) << 21 | c;
+  };
+  std::vector<uint64_t> expected, got;
+  for (size_t t = 0; t < original.triangle_count(); ++t)
+    expected.push_back(key(original.indices[3 * t], original.indices[3 * t + 1], original.indices[3 * t + 2]));
+  const std::vector<Object> patches = split_into_patches(std::move(big), 16384);
+  EXPECT_GE(patches.size(), 2000000u / 16384);
+  for (size_t k = 0; k < patches.size(); ++k) {
+    const Object& p = patches[k];
+    EXPECT_LE(p.mesh.triangle_count(), 16384u);
+    EXPECT_GE(p.mesh.triangle_count(), 16384u / 2);
+    EXPECT_EQ(p.id, 4u);
+    EXPECT_EQ(p.name, "scan#" + std::to_string(k));
+    EXPECT_EQ(p.bounds.min, bounds_of(p.mesh).min);
+    EXPECT_EQ(p.bounds.max, bounds_of(p.mesh).max);
+    std::vector<uint32_t> index_of(p.mesh.positions.size());
+    for (size_t v = 0; v < p.mesh.positions.size(); ++v) {
+      const Vec3& q = p.mesh.positions[v];
+      index_of[v] = uint32_t(q.z) * kSide + uint32_t(q.x);
+      ASSERT_EQ(q, original.positions[index_of[v]]);
+      ASSERT_EQ(p.mesh.normals[v], original.normals[index_of[v]]);
+    }
+    for (size_t t = 0; t < p.mesh.triangle_count(); ++t)
+      got.push_back(key(index_of[p.mesh.indices[3 * t]], index_of[p.mesh.indices[3 * t + 1]], index_of[p.mesh.indices[3 * t + 2]]));
+  }
+  std::sort(expected.begin(), expected.end());
+  std::sort(got.begin(), got.end());
+  EXPECT_TRUE(got == expected) << got.size() << " triangles in patches against " << expected.size();
+  // Small meshes pass through whole.
+  Object small;
+  small.mesh = test::box_mesh({{0, 0, 0}, {1, 1, 1}});
+  EXPECT_EQ(split_into_patches(small, 12).size(), 1u);
+  EXPECT_EQ(split_into_patches(small, 5).size(), 4u);
+}
+
 // --- the command ---------------------------------------------------------------------------
+
+// --up, --scale, --offset and --place grid, read back from the scene written.
+TEST(ImportCommand, PlacesModelsAsAsked) {
+  TempDir dir;
+  const std::string tetra = cgal_mesh("colored_tetra.ply"), cow = cgal_mesh("cow.off");
+  const Aabb t = import_model(tetra).at(0).bounds;
+  const auto bounds_after = [&](const std::string& options, size_t object) {
+    const std::string scene = dir.file("p.cwscene");
+    const auto r = test::run_cellwalk("import " + options + " -o " + scene);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return SceneReader(scene).read_object(ObjectId(object)).bounds;
+  };
+  const Aabb z_up = bounds_after(tetra + " --up z", 0);
+  EXPECT_NEAR(z_up.min.y, t.min.z, 1e-5);
+  EXPECT_NEAR(z_up.max.z, -t.min.y, 1e-5);
+  const Aabb moved = bounds_after(tetra + " --scale 2 --offset 1,-2,3", 0);
+  EXPECT_NEAR(moved.min.x, 2 * t.min.x + 1, 1e-5);
+  EXPECT_NEAR(moved.max.y, 2 * t.max.y - 2, 1e-5);
+  EXPECT_NEAR(moved.max.z, 2 * t.max.z + 3, 1e-5);
+  // Two models side by side on the ground, not overlapping.
+  const Aabb first = bounds_after(tetra + " " + cow + " --place grid", 0);
+  const Aabb second = bounds_after(tetra + " " + cow + " --place grid", 1);
+  EXPECT_NEAR(first.min.y, 0, 1e-5);
+  EXPECT_NEAR(second.min.y, 0, 1e-5);
+  EXPECT_GT(second.min.x, first.max.x);
+  const auto split = test::run_cellwalk("import " + cow + " --patch-triangles 1000 --json -o " + dir.file("c.cwscene"));
+  ASSERT_EQ(split.exit_code, 0) << split.output;
+  const nlohmann::json j = nlohmann::json::parse(split.output);
+  EXPECT_EQ(j["split_into_patches"], 1);
+  EXPECT_GE(j["objects"].get<int>(), 6);
+  const SceneReader scene(dir.file("c.cwscene"));
+  for (ObjectId id = 0; id < scene.object_count(); ++id) EXPECT_LE(scene.read_object(id).mesh.triangle_count(), 1000u);
+  for (const char* bad : {"--up x", "--offset 1,2", "--place row", "--scale 0", "--offset 1,2,nan"}) {
+    const auto r = test::run_cellwalk("import " + tetra + " " + bad + " -o " + dir.file("bad.cwscene"));
+    EXPECT_NE(r.exit_code, 0) << bad;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << bad << ": " << r.output;
+  }
+}
 
 TEST(ImportCommand, WritesASceneAndCounts) {
   TempDir dir;
@@ -511,9 +698,12 @@ TEST(ImportCommand, WritesASceneAndCounts) {
                                      cgal_mesh("colored_tetra.ply") + " -o " +
                                      dir.file("s.cwscene") + " --obj " + dir.file("s.obj"));
   EXPECT_EQ(ok.exit_code, 0) << ok.output;
-  EXPECT_EQ(ok.output.rfind("imported 2 objects, 75412 triangles, ", 0), 0u) << ok.output;
+  // The bunny is split into 8 patches of 9,426 triangles (at most 16,384 each by default).
+  EXPECT_EQ(ok.output.rfind("imported 9 objects, 75412 triangles, ", 0), 0u) << ok.output;
   EXPECT_TRUE(std::filesystem::exists(dir.file("s.cwscene")));
-  EXPECT_EQ(import_model(dir.file("s.obj")).at(0).mesh.triangle_count(), 75412u);
+  size_t exported = 0;
+  for (const Object& o : import_model(dir.file("s.obj"))) exported += o.mesh.triangle_count();
+  EXPECT_EQ(exported, 75412u);
 
   const auto json = test::run_cellwalk("import " + cgal_mesh("colored_tetra.ply") + " -o " +
                                        dir.file("t.cwscene") + " --json");

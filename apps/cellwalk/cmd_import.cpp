@@ -1,11 +1,15 @@
-// `cellwalk import FILE... -o OUT.cwscene [--obj X.obj] [--gltf X.gltf] [--json]`: reads model
-// files (OBJ, PLY, OFF, glTF/GLB) one at a time into a scene file, optionally also exporting
-// OBJ/glTF for inspection, and gives the scene a walkable loop around the models.
+// `cellwalk import FILE... -o OUT.cwscene [--scale S] [--up y|z] [--offset X,Y,Z] [--place grid]
+// [--patch-triangles N] [--obj X.obj] [--gltf X.gltf] [--json]`: reads model files (OBJ, PLY,
+// OFF, glTF/GLB) one at a time into a scene file, places them, splits large meshes into
+// patches, optionally also exports OBJ/glTF for inspection, and gives the scene a walkable
+// loop around the models.
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/error.hpp"
@@ -24,7 +28,55 @@ struct ImportOptions {
   std::string obj;
   std::string gltf;
   bool json = false;
+  Placement placement;
+  std::string up = "y";
+  std::vector<float> offset;
+  std::string place = "as-is";
+  size_t patch_triangles = 16384;
 };
+
+// --place grid: models side by side in rows of ceil(sqrt(n)), each standing on y = 0, a fifth
+// of its footprint apart. Only the model being read is known: each advances the cursor.
+class GridPlacer {
+ public:
+  explicit GridPlacer(size_t models) : per_row_(size_t(std::ceil(std::sqrt(double(models))))) {}
+  // The translation that puts a model with these bounds at the next place.
+  Vec3 next(const Aabb& b) {
+    if (placed_ > 0 && placed_ % per_row_ == 0) {
+      z_ += row_depth_ * 1.2f;
+      x_ = 0.0f;
+      row_depth_ = 0.0f;
+    }
+    const Vec3 size = b.size();
+    const Vec3 move(x_ - b.min.x, -b.min.y, z_ - b.min.z);
+    x_ += size.x + 0.2f * std::max(size.x, size.z);
+    row_depth_ = std::max(row_depth_, size.z);
+    ++placed_;
+    return move;
+  }
+
+ private:
+  size_t per_row_;
+  size_t placed_ = 0;
+  float x_ = 0.0f, z_ = 0.0f, row_depth_ = 0.0f;
+};
+
+// The model's objects placed: turned, scaled, moved onto the grid when asked, then offset.
+void place_model(std::vector<Object>& objects, const ImportOptions& opt, GridPlacer& grid) {
+  Placement turn = opt.placement;
+  turn.offset = Vec3(0.0f);
+  const Mat4 m = placement_matrix(turn);
+  Aabb bounds;
+  for (Object& o : objects) {
+    place(o, m);
+    bounds.extend(o.bounds);
+  }
+  Vec3 move = opt.placement.offset;
+  if (opt.place == "grid" && !bounds.empty()) move += grid.next(bounds);
+  if (move == Vec3(0.0f)) return;
+  const Mat4 t = glm::translate(Mat4(1.0f), move);
+  for (Object& o : objects) place(o, t);
+}
 
 // Imported models come with no navigable space; a square loop at eye height around them,
 // 10% of their extent away (at least 1 m, so a flat or point-like model still gets a loop),
@@ -54,19 +106,27 @@ void run_import(const ImportOptions& opt) {
 
   SceneCounts counts;
   Aabb bounds;
-  uint64_t skipped = 0;
+  uint64_t skipped = 0, split = 0;
+  GridPlacer grid(opt.inputs.size());
   // One file at a time: only the model being read is in memory.
   for (const std::string& file : opt.inputs) {
-    for (Object& object : import_model(file)) {
+    std::vector<Object> objects = import_model(file);
+    place_model(objects, opt, grid);
+    for (Object& read : objects) {
       // A point cloud has nothing to draw; ids stay dense over the objects kept.
-      if (object.mesh.triangle_count() == 0) {
+      if (read.mesh.triangle_count() == 0) {
         ++skipped;
         continue;
       }
-      object.id = static_cast<ObjectId>(counts.objects);
-      bounds.extend(object.bounds);
-      counts.count(object);
-      out.add(object);
+      std::vector<Object> patches = opt.patch_triangles > 0 ? split_into_patches(std::move(read), opt.patch_triangles)
+                                                           : std::vector<Object>{std::move(read)};
+      split += patches.size() > 1;
+      for (Object& object : patches) {
+        object.id = static_cast<ObjectId>(counts.objects);
+        bounds.extend(object.bounds);
+        counts.count(object);
+        out.add(object);
+      }
     }
   }
   if (counts.objects == 0) fail("import", "the input files hold no triangles");
@@ -81,13 +141,14 @@ void run_import(const ImportOptions& opt) {
   if (opt.json) {
     nlohmann::json j = {{"output", opt.output},      {"objects", counts.objects},
                         {"triangles", counts.triangles}, {"vertices", counts.vertices},
-                        {"bytes", counts.bytes},     {"skipped_without_triangles", skipped}};
+                        {"bytes", counts.bytes},     {"skipped_without_triangles", skipped},
+                        {"split_into_patches", split}};
     std::printf("%s\n", j.dump(2).c_str());
   } else {
-    std::printf("imported %llu objects, %llu triangles, %llu bytes\n",
-                static_cast<unsigned long long>(counts.objects),
-                static_cast<unsigned long long>(counts.triangles),
-                static_cast<unsigned long long>(counts.bytes));
+    std::printf("imported %llu objects, %llu triangles, %llu bytes", static_cast<unsigned long long>(counts.objects),
+                static_cast<unsigned long long>(counts.triangles), static_cast<unsigned long long>(counts.bytes));
+    if (split > 0) std::printf(" (%llu large meshes split into patches of at most %zu triangles)", static_cast<unsigned long long>(split), opt.patch_triangles);
+    std::printf("\n");
   }
 }
 
@@ -100,8 +161,27 @@ void register_import(CLI::App& root) {
   cmd->add_option("-o,--output", opt->output, "Scene file to write (.cwscene)")->required();
   cmd->add_option("--obj", opt->obj, "Also export the objects as OBJ");
   cmd->add_option("--gltf", opt->gltf, "Also export the objects as glTF (.gltf or .glb)");
+  cmd->add_option("--scale", opt->placement.scale, "Multiply coordinates by this (e.g. 0.001 for a model in millimetres)")
+      ->capture_default_str()->check(number_in(0, 1e6, true));
+  cmd->add_option("--up", opt->up, "The models' up axis: y (glTF, most games) or z (CAD, many scans); turned to +y")
+      ->capture_default_str()->check(CLI::IsMember({"y", "z"}));
+  cmd->add_option("--offset", opt->offset, "Move the models by X,Y,Z after scaling")->expected(3)->delimiter(',');
+  cmd->add_option("--place", opt->place, "as-is: models keep their coordinates; grid: side by side on the ground, one per file")
+      ->capture_default_str()->check(CLI::IsMember({"as-is", "grid"}));
+  cmd->add_option("--patch-triangles", opt->patch_triangles,
+                  "Split meshes larger than this into spatial patches of at most this many triangles, so that culling and "
+                  "LOD work on parts of one big mesh (0: never split)")
+      ->capture_default_str()->check(integer_in(0, 1 << 30));
   cmd->add_flag("--json", opt->json, "Print the counts as JSON");
-  cmd->callback([opt] { run_import(*opt); });
+  cmd->callback([opt] {
+    opt->placement.z_up = opt->up == "z";
+    if (!opt->offset.empty()) {
+      for (float v : opt->offset)
+        if (!std::isfinite(v) || std::abs(v) > 1e7f) fail("--offset", "each of X,Y,Z must be a number within ±1e7 m");
+      opt->placement.offset = Vec3(opt->offset[0], opt->offset[1], opt->offset[2]);
+    }
+    run_import(*opt);
+  });
 }
 
 }  // namespace cellwalk::app

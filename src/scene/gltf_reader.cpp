@@ -1,5 +1,6 @@
-// glTF 2.0 / GLB reader on tinygltf (syoyo/tinygltf): one object per mesh node of the default
-// scene, with the node hierarchy's transforms applied. tinygltf parses the JSON and resolves
+// glTF 2.0 / GLB reader on tinygltf (syoyo/tinygltf): one object per triangle primitive of each
+// mesh node of the default scene, with the node hierarchy's transforms applied and the
+// primitive's material's base colour. tinygltf parses the JSON and resolves
 // buffers; everything it does not check is checked here: the GLB framing, that accessors lie
 // inside their buffer views and views inside their buffers, index ranges, node cycles.
 // Triangle primitives (lists, strips, fans) are read; points and lines are skipped.
@@ -87,6 +88,35 @@ void check_json_depth_of(Bytes b, bool glb, const std::string& name) {
   if (b.size() >= 20) check_json_depth(std::string_view(text + 20, std::min<size_t>(le32(b, 12), b.size() - 20)), 20, name);
 }
 
+// The extensions this reader decodes; a file that requires any other fails naming it, before
+// tinygltf would report a symptom ("Invalid byteLength", "invalid bufferView").
+constexpr std::string_view kReadableExtensions[] = {"KHR_mesh_quantization", "KHR_materials_unlit",
+                                                    "KHR_texture_transform"};
+
+std::string what_to_do_for(std::string_view extension) {
+  if (extension == "EXT_meshopt_compression" || extension == "KHR_meshopt_compression")
+    return "; write it without compression (gltfpack without -c/-cc) and import that";
+  if (extension == "KHR_draco_mesh_compression")
+    return "; decompress it first (e.g. gltf-transform's 'copy' or Blender's glTF export without Draco)";
+  return "; re-export the model without it";
+}
+
+// Fails when the JSON lists a required extension this reader cannot decode. JSON that does
+// not parse is left for tinygltf to report.
+void check_required_extensions(Bytes b, bool glb, const std::string& name) {
+  const auto* text = reinterpret_cast<const char*>(b.data());
+  std::string_view json(text, b.size());
+  if (glb) json = b.size() >= 20 ? std::string_view(text + 20, std::min<size_t>(le32(b, 12), b.size() - 20)) : "";
+  const nlohmann::json doc = nlohmann::json::parse(json.begin(), json.end(), nullptr, false);
+  if (!doc.is_object() || !doc.contains("extensionsRequired") || !doc["extensionsRequired"].is_array()) return;
+  for (const nlohmann::json& e : doc["extensionsRequired"]) {
+    if (!e.is_string()) continue;
+    const std::string ext = e.get<std::string>();
+    if (std::find(std::begin(kReadableExtensions), std::end(kReadableExtensions), ext) == std::end(kReadableExtensions))
+      fail(name, "requires the glTF extension " + ext + ", which cellwalk cannot read yet" + what_to_do_for(ext));
+  }
+}
+
 // Buffers are read from files only below `base_dir`, and only when it is set.
 struct FileAccess {
   std::filesystem::path base_dir;
@@ -136,6 +166,7 @@ tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& ba
   if (glb) check_glb_framing(bytes, name);
   if (bytes.size() > UINT32_MAX) fail(name, "file larger than 4 GiB");
   check_json_depth_of(bytes, glb, name);
+  check_required_extensions(bytes, glb, name);
   FileAccess access{base_dir.empty() ? std::filesystem::path()
                                      : std::filesystem::path(base_dir).lexically_normal()};
   tinygltf::TinyGLTF loader;
@@ -307,15 +338,13 @@ Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
   return mesh;
 }
 
-Rgba8 material_color(const tinygltf::Model& m, const tinygltf::Mesh& mesh) {
-  for (const tinygltf::Primitive& p : mesh.primitives) {
-    if (p.material < 0 || static_cast<size_t>(p.material) >= m.materials.size()) continue;
-    const std::vector<double>& f = m.materials[p.material].pbrMetallicRoughness.baseColorFactor;
-    if (f.size() != 4) continue;
-    auto ch = [&f](int k) { return color_channel(f[k], 1.0); };
-    return rgba8(ch(0), ch(1), ch(2), ch(3));
-  }
-  return Object{}.color;
+// The primitive's material's base colour factor; the default colour without one.
+Rgba8 material_color(const tinygltf::Model& m, const tinygltf::Primitive& p) {
+  if (p.material < 0 || static_cast<size_t>(p.material) >= m.materials.size()) return Object{}.color;
+  const std::vector<double>& f = m.materials[p.material].pbrMetallicRoughness.baseColorFactor;
+  if (f.size() != 4) return Object{}.color;
+  auto ch = [&f](int k) { return color_channel(f[k], 1.0); };
+  return rgba8(ch(0), ch(1), ch(2), ch(3));
 }
 
 Mat4 local_matrix(const tinygltf::Node& n, const std::string& where) {
@@ -345,26 +374,32 @@ void keep_winding(Mesh& mesh, const Mat4& m) {
 
 std::string stem_of(const std::string& name) { return std::filesystem::path(name).stem().string(); }
 
-// The node's object, or one without triangles when its mesh has none.
-Object object_of_node(const tinygltf::Model& m, int node_index, const Mat4& world,
-                      const std::string& name) {
+// One object per triangle primitive of the node's mesh (each primitive has its own material,
+// and objects are what culling and LOD work on), unfinished, transformed to world space.
+std::vector<Object> objects_of_node(const tinygltf::Model& m, int node_index, const Mat4& world,
+                                    const std::string& name) {
   const tinygltf::Node& node = m.nodes[node_index];
   const std::string where = name + ": node " + std::to_string(node_index);
   if (static_cast<size_t>(node.mesh) >= m.meshes.size()) fail(where, "names a missing mesh");
   const tinygltf::Mesh& gm = m.meshes[node.mesh];
-  Object object;
-  object.name = !node.name.empty() ? node.name
-                : !gm.name.empty() ? gm.name
-                                   : stem_of(name) + "#" + std::to_string(node_index);
-  object.color = material_color(m, gm);
-  for (size_t k = 0; k < gm.primitives.size(); ++k)
-    if (is_triangles(gm.primitives[k].mode))
-      append(object.mesh, read_primitive(m, gm.primitives[k],
-                                         where + " mesh " + std::to_string(node.mesh) +
-                                             " primitive " + std::to_string(k)));
-  transform(object.mesh, world);
-  keep_winding(object.mesh, world);
-  return object;
+  const std::string base = !node.name.empty() ? node.name
+                           : !gm.name.empty() ? gm.name
+                                              : stem_of(name) + "#" + std::to_string(node_index);
+  size_t triangle_primitives = 0;
+  for (const tinygltf::Primitive& p : gm.primitives) triangle_primitives += is_triangles(p.mode);
+  std::vector<Object> objects;
+  for (size_t k = 0; k < gm.primitives.size(); ++k) {
+    if (!is_triangles(gm.primitives[k].mode)) continue;
+    Object object;
+    object.name = triangle_primitives > 1 ? base + "/" + std::to_string(k) : base;
+    object.color = material_color(m, gm.primitives[k]);
+    object.mesh = read_primitive(m, gm.primitives[k],
+                                 where + " mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(k));
+    transform(object.mesh, world);
+    keep_winding(object.mesh, world);
+    objects.push_back(std::move(object));
+  }
+  return objects;
 }
 
 // The roots to walk: the default scene's (else the first scene's), else every node that is
@@ -406,8 +441,8 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
     const tinygltf::Node& node = m.nodes[index];
     const Mat4 world = parent * local_matrix(node, name + ": node " + std::to_string(index));
     if (node.mesh >= 0) {
-      Object object = object_of_node(m, index, world, name);
-      if (object.mesh.triangle_count() > 0) {
+      for (Object& object : objects_of_node(m, index, world, name)) {
+        if (object.mesh.triangle_count() == 0) continue;
         object.id = first_id + static_cast<ObjectId>(objects.size());
         finish_object(object, name + ": node " + std::to_string(index));
         objects.push_back(std::move(object));

@@ -71,16 +71,19 @@ std::vector<Object> parse(ModelFormat format, std::span<const uint8_t> bytes,
     if (objects.empty()) fail(name, "the scene has no mesh node with triangles");
     return objects;
   }
-  Object object = format == ModelFormat::kOff   ? detail::read_off(bytes, name)
-                  : format == ModelFormat::kPly ? detail::read_ply(bytes, name)
-                                                : detail::read_obj(bytes, name);
-  // A point cloud is accepted (it has vertices); a file with none is not a model at all.
-  if (object.mesh.positions.empty()) fail(name, "holds no vertices");
-  object.id = first_id;
-  object.name = std::filesystem::path(name).stem().string();
-  detail::finish_object(object, name);
   std::vector<Object> objects;
-  objects.push_back(std::move(object));
+  if (format == ModelFormat::kObj) {
+    objects = detail::read_obj(bytes, name, base_dir);
+  } else {
+    objects.push_back(format == ModelFormat::kOff ? detail::read_off(bytes, name) : detail::read_ply(bytes, name));
+    objects.back().name = std::filesystem::path(name).stem().string();
+  }
+  // A point cloud is accepted (it has vertices); a file with none is not a model at all.
+  if (objects.empty() || objects.front().mesh.positions.empty()) fail(name, "holds no vertices");
+  for (size_t i = 0; i < objects.size(); ++i) {
+    objects[i].id = first_id + static_cast<ObjectId>(i);
+    detail::finish_object(objects[i], objects.size() > 1 ? name + ": " + objects[i].name : name);
+  }
   return objects;
 }
 
@@ -105,9 +108,9 @@ std::vector<Object> parse_model(ModelFormat format, std::span<const uint8_t> byt
 std::vector<Object> import_model(const std::string& file, ObjectId first_id) {
   const ModelFormat format = format_of(file);
   const std::vector<uint8_t> bytes = detail::read_whole_file(file);
-  // Only a .gltf beside its .bin buffers may read other files.
+  // Only a .gltf beside its .bin buffers and an .obj beside its .mtl files read other files.
   const std::string base_dir =
-      format == ModelFormat::kGltf
+      format == ModelFormat::kGltf || format == ModelFormat::kObj
           ? std::filesystem::absolute(file).parent_path().lexically_normal().string()
           : "";
   return parse(format, bytes, file, first_id, base_dir);

@@ -20,7 +20,10 @@ using Bytes = std::span<const uint8_t>;
 // normals/colours the file had; finish_object() (import.cpp) does the rest.
 Object read_off(Bytes bytes, const std::string& name);
 Object read_ply(Bytes bytes, const std::string& name);
-Object read_obj(Bytes bytes, const std::string& name);
+
+// One unfinished object per o/g group (obj_reader.cpp); .mtl files are read from `base_dir`
+// only when it is not empty.
+std::vector<Object> read_obj(Bytes bytes, const std::string& name, const std::string& base_dir);
 
 // One finished object per mesh node, ids from first_id. External buffers ("x.bin") are read
 // from `base_dir` only when it is not empty; parsing from memory never touches the disk.

@@ -27,6 +27,23 @@ std::vector<Object> parse_model(ModelFormat format, std::span<const uint8_t> byt
 // Reads and parses a file (a directory, an empty or unreadable file is an Error).
 std::vector<Object> import_model(const std::string& file, ObjectId first_id = 0);
 
+// Splits an object of more than `max_triangles` triangles into spatial patches of at most that
+// many (recursive median splits of triangle centroids along the longest axis), each with its
+// own vertices (normals and colours carried, so seams shade alike), named NAME#k, with the
+// object's id and colour. The patches partition the triangles. REQUIRES: max_triangles > 0.
+std::vector<Object> split_into_patches(Object object, size_t max_triangles);
+
+// Where an imported model goes: first its up axis is turned to +y, then it is scaled, then
+// moved by `offset`.
+struct Placement {
+  bool z_up = false;  // the model's up is +z (CAD, many scans)
+  float scale = 1.0f;
+  Vec3 offset{0.0f};
+};
+Mat4 placement_matrix(const Placement& placement);
+// Transforms the object's mesh (normals too) and recomputes its bounds.
+void place(Object& object, const Mat4& m);
+
 // Exporters: write the objects they receive; finish() completes the file (written to a
 // temporary name, renamed on finish).
 class ObjWriter : public ObjectSink {
