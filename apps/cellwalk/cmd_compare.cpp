@@ -48,7 +48,9 @@ NamedFidelity compare_one(const CompareArgs& args, const World& world, const Cam
   // The ground truth is outside the budget: it holds every object it draws (`walk` is the
   // command whose process stays within --budget).
   auto truth = make_strategy("ground-truth", world, {});
-  Renderer renderer(args.render_settings(budget));
+  RenderSettings settings = args.render_settings(budget);
+  fit_backdrop(settings, world.info().bounds);
+  Renderer renderer(settings);
   CompareOptions options = args.options;
   options.image_dir = options.max_images > 0 ? args.out : "";
   options.label = label;

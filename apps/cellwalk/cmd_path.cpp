@@ -3,7 +3,9 @@
 // graph does not lie in it, as an import's loop does not).
 #include <algorithm>
 #include <cmath>
+#include <cctype>
 #include <cstdio>
+#include <cstdlib>
 #include <numbers>
 #include <optional>
 #include <string>
@@ -47,22 +49,100 @@ CameraPath thesis_camera_path(const SceneInfo& info, int which, double fps) {
   return out;
 }
 
+// The box of --around: an object of the world by id or name, or the whole world ("").
+Aabb inspection_target(const std::string& around, const std::string& file, const SceneInfo& info) {
+  if (around.empty()) return info.bounds;
+  if (!is_world_file(file)) fail("--around", "needs a world file (cellwalk build) to find objects in");
+  const World world(file);
+  const std::vector<std::string> names = world.object_names();
+  for (size_t id = 0; id < names.size(); ++id)
+    if (names[id] == around) return world.object(ObjectId(id)).bounds;
+  char* end = nullptr;
+  const unsigned long long id = std::strtoull(around.c_str(), &end, 10);
+  if (!around.empty() && *end == '\0' && std::isdigit(static_cast<unsigned char>(around[0])) && id < world.object_count())
+    return world.object(ObjectId(id)).bounds;
+  fail("--around " + around, "no object has this name or id (ids 0 to " + std::to_string(world.object_count() - 1) +
+                                 "; cellwalk info --json lists the names)");
+}
+
+// --look-at: "centre" (of the world's bounds) or X,Y,Z.
+Vec3 look_at_point(const std::string& look_at, const SceneInfo& info) {
+  if (look_at == "centre" || look_at == "center") return info.bounds.center();
+  float v[3];
+  char tail = 0;
+  if (std::sscanf(look_at.c_str(), "%f,%f,%f%c", &v[0], &v[1], &v[2], &tail) != 3 || !std::isfinite(v[0]) ||
+      !std::isfinite(v[1]) || !std::isfinite(v[2]))
+    fail("--look-at " + look_at, "give centre or a point X,Y,Z");
+  return {v[0], v[1], v[2]};
+}
+
+struct PathArgs {
+  std::string scene, out, kind = "normal";
+  PathParams params;
+  bool planner = false;
+  PlannerOptions planning;
+  std::string around, look_at;
+  bool coverage = false;
+};
+
+// The path of the kind asked for, before --look-at.
+CameraPath make_path(PathArgs& args, const SceneInfo& info) {
+  if (args.kind == "inspect") {
+    if (args.planner) fail("--planner", "plans street and free-space paths; inspect goes around the world or an object");
+    return inspection_path(inspection_target(args.around, args.scene, info), args.params);
+  }
+  if (args.kind == "scan" || args.kind == "orbit") {
+    if (args.planner) fail("--planner", "plans street and free-space paths; scan and orbit go around the world's bounds");
+    return thesis_camera_path(info, args.kind == "scan" ? 1 : 2, args.params.fps);
+  }
+  args.params.kind = parse_session_kind(args.kind);
+  const bool world_file = is_world_file(args.scene);
+  std::optional<World> world;
+  if (world_file) world.emplace(args.scene);
+  bool plan = args.planner;
+  if (!plan && world && !nav_lies_in_world(*world)) {
+    std::printf("path: the world's navigation graph does not lie in it; planning its free space (--planner)\n");
+    plan = true;
+  }
+  if (plan && !world_file)
+    fail(args.scene, "the planner needs the world's triangles; build the scene (cellwalk build) and plan on the world file");
+  if (!plan) return generate_path(info.nav, args.params);
+  const PlannedSpace space = plan_or_fly(*world, args.planning, !args.planner);
+  const PlannerOptions& o = space.options;
+  std::printf("path: planned %zu nodes, %zu edges of free space (of %llu grid points, %llu free) in %.2f s "
+              "(+%.2f s loading); eye height %.3g, clearance %.3g, spacing %.3g, reach %.3g%s\n",
+              space.nav.nodes.size(), space.nav.edges.size(), static_cast<unsigned long long>(space.candidates),
+              static_cast<unsigned long long>(space.free), space.plan_seconds, space.load_seconds, o.eye_height,
+              o.clearance, o.spacing, o.reach, o.fly ? ", flying" : "");
+  return generate_path(space.nav, args.params);
+}
+
+// "in view": the world covers at least 1 % of the image (a 64-ray-wide grid).
+void report_coverage(const World& world, const CameraPath& path) {
+  const std::vector<float> coverage = view_coverage(world, path, Camera{});
+  std::vector<float> sorted = coverage;
+  std::sort(sorted.begin(), sorted.end());
+  const size_t in_view = size_t(std::count_if(coverage.begin(), coverage.end(), [](float c) { return c >= 0.01f; }));
+  std::printf("path: the world is in view (>= 1 %% of the image) on %zu of %zu frames (%.1f %%); it covers %.1f %% of "
+              "the image at the median frame, %.1f %% at the least\n",
+              in_view, coverage.size(), 100.0 * in_view / coverage.size(), 100.0 * sorted[sorted.size() / 2], 100.0 * sorted.front());
+}
+
 void register_path(CLI::App& root) {
   auto* cmd = root.add_subcommand("path", "Generate a camera path in a world's streets or, planned, its free space");
-  struct Args {
-    std::string scene, out, kind = "normal";
-    PathParams params;
-    bool planner = false;
-    PlannerOptions planning;
-  };
-  auto args = std::make_shared<Args>();
+  auto args = std::make_shared<PathArgs>();
   cmd->add_option("file", args->scene, "World file (.cww) or scene file (.cwscene)")->required();
   cmd->add_option("-o,--output", args->out, "Path file to write")->required();
   cmd->add_option("--kind", args->kind,
                   "Session kind: normal, slow, fast, turning, backward, back-and-forth, random; or around the world's "
                   "bounds, the VDR thesis's paths: scan (approach, then scans up and across; 180 frames) or orbit "
-                  "(approach, then orbit; 194 frames)")
+                  "(approach, then orbit; 194 frames); or inspect: once around the world or one object (--around), "
+                  "looking at it, over --frames")
       ->capture_default_str();
+  cmd->add_option("--around", args->around, "inspect: the object to go around, by name or id (default: the whole world)");
+  cmd->add_option("--look-at", args->look_at,
+                  "Turn every frame to look at this point: centre (of the world) or X,Y,Z (e.g. a planned flight that "
+                  "keeps a model in view)");
   cmd->add_option("--frames", args->params.frames, "Number of frames")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--fps", args->params.fps, "Frames per second of path time")->capture_default_str()->check(number_in(0.1, 1000));
   cmd->add_option("--seed", args->params.seed, "Random seed")->capture_default_str()->check(integer_in(0, INT64_MAX));
@@ -81,47 +161,24 @@ void register_path(CLI::App& root) {
       ->check(number_in(0, 1e7, true))->needs(planner);
   cmd->add_flag("--fly", args->planning.fly, "Planner: fly through the volume (a 3-D grid) instead of walking on floors")
       ->needs(planner);
+  cmd->add_flag("--coverage", args->coverage,
+                "Also report how much of each frame shows the world (rays against its triangles, 60° lens, 4:3; "
+                "needs a world file)");
   cmd->callback([args] {
     refuse_same_files({args->scene}, {args->out});
-    if (args->kind == "scan" || args->kind == "orbit") {
-      if (args->planner) fail("--planner", "plans street and free-space paths; scan and orbit go around the world's bounds");
-      const SceneInfo info = is_world_file(args->scene) ? World(args->scene).info() : SceneReader(args->scene).info();
-      CameraPath path = thesis_camera_path(info, args->kind == "scan" ? 1 : 2, args->params.fps);
-      path.world = path_world(info);
-      write_path(path, args->out);
-      std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(), path.frames.back().time,
-                  args->out.c_str());
-      return;
-    }
-    args->params.kind = parse_session_kind(args->kind);
-    const bool world_file = is_world_file(args->scene);
-    std::optional<World> world;
-    if (world_file) world.emplace(args->scene);
-    const SceneInfo info = world ? world->info() : SceneReader(args->scene).info();
-    bool plan = args->planner;
-    if (!plan && world && !nav_lies_in_world(*world)) {
-      std::printf("path: the world's navigation graph does not lie in it; planning its free space (--planner)\n");
-      plan = true;
-    }
-    if (plan && !world_file)
-      fail(args->scene, "the planner needs the world's triangles; build the scene (cellwalk build) and plan on the world file");
-    CameraPath path;
-    if (plan) {
-      const PlannedSpace space = plan_or_fly(*world, args->planning, !args->planner);
-      const PlannerOptions& o = space.options;
-      std::printf("path: planned %zu nodes, %zu edges of free space (of %llu grid points, %llu free) in %.2f s "
-                  "(+%.2f s loading); eye height %.3g, clearance %.3g, spacing %.3g, reach %.3g%s\n",
-                  space.nav.nodes.size(), space.nav.edges.size(), static_cast<unsigned long long>(space.candidates),
-                  static_cast<unsigned long long>(space.free), space.plan_seconds, space.load_seconds, o.eye_height,
-                  o.clearance, o.spacing, o.reach, o.fly ? ", flying" : "");
-      path = generate_path(space.nav, args->params);
-    } else {
-      path = generate_path(info.nav, args->params);
+    if (!args->around.empty() && args->kind != "inspect") fail("--around", "goes with --kind inspect");
+    if (args->coverage && !is_world_file(args->scene)) fail("--coverage", "needs a world file (cellwalk build)");
+    const SceneInfo info = is_world_file(args->scene) ? World(args->scene).info() : SceneReader(args->scene).info();
+    CameraPath path = make_path(*args, info);
+    if (!args->look_at.empty()) {
+      const Vec3 target = look_at_point(args->look_at, info);
+      for (PathFrame& f : path.frames) aim_at(f, target);
     }
     path.world = path_world(info);
     write_path(path, args->out);
     std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(),
                 path.frames.back().time, args->out.c_str());
+    if (args->coverage) report_coverage(World(args->scene), path);
   });
 }
 

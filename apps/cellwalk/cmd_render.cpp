@@ -51,7 +51,9 @@ void register_render(CLI::App& root) {
     options.viewport_height_px = float(args->lens.height);
     auto strategy = make_strategy(args->strategy, world, options);
     auto context = GlContext::headless();
-    Renderer renderer(args->lens.render_settings());
+    RenderSettings settings = args->lens.render_settings();
+    fit_backdrop(settings, world.info().bounds);
+    Renderer renderer(settings);
     FrameStats stats = render_frame(*strategy, renderer, camera);
     write_png(renderer.read_color(), args->out);
     std::printf("render: %llu objects, %llu triangles in %.1f ms, wrote %s\n", (unsigned long long)stats.objects,

@@ -24,7 +24,9 @@ namespace {
 WalkSummary walk_one(const ReplayOptions& args, const World& world, const CameraPath& path, const RunBudget& budget,
                      uint64_t baseline, const std::string& given, std::vector<std::string>& labels) {
   reset_peak_rss();
-  Renderer renderer(args.render_settings(budget));
+  RenderSettings settings = args.render_settings(budget);
+  fit_backdrop(settings, world.info().bounds);
+  Renderer renderer(settings);
   ReplayOptions::Run run = args.make_run(given, world, budget, labels);
   const std::string& label = run.label;
   const std::unique_ptr<Strategy> strategy = std::move(run.strategy);

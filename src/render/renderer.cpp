@@ -5,6 +5,7 @@
 #include <epoxy/gl.h>
 
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <chrono>
 #include <glm/gtc/matrix_transform.hpp>
@@ -200,6 +201,7 @@ struct Renderer::Impl {
                               glm::value_ptr(inverse));
     glProgramUniform3fv(backdrop_program, render::kBackdropEyeUniform, 1, glm::value_ptr(camera.position));
     glProgramUniform3f(backdrop_program, render::kSkyColorUniform, sky[0], sky[1], sky[2]);
+    glProgramUniform3f(backdrop_program, render::kGroundUniform, settings.ground_y, settings.ground_grid, settings.ground_haze);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     const GLenum color_and_ids[] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
     glNamedFramebufferDrawBuffers(framebuffer, 2, color_and_ids);
@@ -422,6 +424,14 @@ void Renderer::present(int window_width, int window_height) const {
 
 const RenderSettings& Renderer::settings() const {
   return impl_->settings;
+}
+
+void fit_backdrop(RenderSettings& settings, const Aabb& world_bounds) {
+  if (world_bounds.empty()) return;
+  settings.ground_y = world_bounds.min.y;
+  const float extent = std::max({world_bounds.size().x, world_bounds.size().z, 1e-3f});
+  settings.ground_grid = std::min(10.0f, std::pow(10.0f, std::round(std::log10(extent / 10.0f))));
+  settings.ground_haze = 30.0f * extent;
 }
 
 }  // namespace cellwalk

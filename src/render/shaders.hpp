@@ -54,6 +54,7 @@ void main() {
 constexpr int kInverseViewProjectionUniform = 0;
 constexpr int kBackdropEyeUniform = 1;
 constexpr int kSkyColorUniform = 2;
+constexpr int kGroundUniform = 3;  // (height, grid step, haze distance)
 
 constexpr const char* kBackdropVertexShader = R"(#version 450 core
 out vec2 v_ndc;
@@ -68,21 +69,23 @@ constexpr const char* kBackdropFragmentShader = R"(#version 450 core
 layout(location = 0) uniform mat4 u_inverse_view_projection;
 layout(location = 1) uniform vec3 u_eye;
 layout(location = 2) uniform vec3 u_sky;
+layout(location = 3) uniform vec3 u_ground;
 in vec2 v_ndc;
 layout(location = 0) out vec4 o_color;
 void main() {
   vec4 near_point = u_inverse_view_projection * vec4(v_ndc, -1.0, 1.0);
   vec4 far_point = u_inverse_view_projection * vec4(v_ndc, 1.0, 1.0);
   vec3 dir = normalize(far_point.xyz / far_point.w - near_point.xyz / near_point.w);
-  if (dir.y >= 0.0 || u_eye.y <= 0.0) {
+  float height = u_eye.y - u_ground.x;
+  if (dir.y >= 0.0 || height <= 0.0) {
     vec3 zenith = vec3(0.36, 0.55, 0.85);
     o_color = vec4(mix(u_sky, zenith, sqrt(max(dir.y, 0.0))), 1.0);
     return;
   }
-  vec3 ground = u_eye + dir * (-u_eye.y / dir.y);
-  vec2 cell = abs(fract(ground.xz / 10.0) - 0.5);
+  vec3 ground = u_eye + dir * (height / -dir.y);
+  vec2 cell = abs(fract(ground.xz / u_ground.y) - 0.5);
   float line = step(0.48, max(cell.x, cell.y));
-  float haze = clamp(length(ground - u_eye) / 3000.0, 0.0, 1.0);
+  float haze = clamp(length(ground - u_eye) / u_ground.z, 0.0, 1.0);
   vec3 earth = mix(vec3(0.42, 0.44, 0.40), vec3(0.34, 0.36, 0.33), line);
   o_color = vec4(mix(earth, u_sky, haze), 1.0);
 }

@@ -108,13 +108,16 @@ std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, 
 
 void run_viewer(const World& scene, const ViewerOptions& options) {
   Window window(options.width, options.height, "cellwalk — " + scene.file().path(), options.max_frames == 0);
-  auto strategy = make_strategy(options.strategy, scene, {});
   int fb_width, fb_height;
   window.framebuffer_size(fb_width, fb_height);
+  StrategyOptions strategy_options;
+  strategy_options.viewport_height_px = float(fb_height);
+  auto strategy = make_strategy(options.strategy, scene, strategy_options);
   RenderSettings settings;
   settings.width = fb_width;
   settings.height = fb_height;
   settings.backdrop = true;
+  fit_backdrop(settings, scene.info().bounds);
   auto renderer = std::make_unique<Renderer>(settings);
 
   ViewerState s;

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numbers>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/random.hpp"
@@ -166,6 +167,71 @@ CameraPath generate_path(const NavGraph& nav, const PathParams& params) {
     }
     s = std::max(0.0, s + direction * speed * dt);
     if (s == 0.0) direction = 1;
+  }
+  return path;
+}
+
+void aim_at(PathFrame& frame, const Vec3& target) {
+  const Vec3 d = target - frame.position;
+  const float length = glm::length(d);
+  if (!(length > 0.0f)) return;
+  // Camera::forward() is (-sin yaw cos pitch, sin pitch, -cos yaw cos pitch).
+  frame.yaw_deg = glm::degrees(std::atan2(-d.x, -d.z));
+  frame.pitch_deg = glm::degrees(std::asin(std::clamp(d.y / length, -1.0f, 1.0f)));
+}
+
+namespace {
+
+// Whether every corner of `box` lies within `fill` of the half-angles of a camera at `eye`
+// looking along unit `d` (yaw-pitch camera: right is horizontal).
+bool box_in_view(const Aabb& box, const Vec3& eye, const Vec3& d, float tan_x, float tan_y) {
+  const Vec3 right = glm::normalize(glm::cross(d, Vec3(0, 1, 0)));
+  const Vec3 up = glm::cross(right, d);
+  for (int k = 0; k < 8; ++k) {
+    const Vec3 p((k & 1 ? box.max : box.min).x, (k & 2 ? box.max : box.min).y, (k & 4 ? box.max : box.min).z);
+    const Vec3 v = p - eye;
+    const float depth = glm::dot(v, d);
+    if (depth <= 0.0f || std::abs(glm::dot(v, right)) > tan_x * depth || std::abs(glm::dot(v, up)) > tan_y * depth) return false;
+  }
+  return true;
+}
+
+// The eye's direction from the centre at step u in [0, 1): once around, elevation 10° to 35° and back.
+Vec3 inspection_direction(float u) {
+  constexpr float kLow = 10.0f, kHigh = 35.0f;
+  const float around = 2.0f * std::numbers::pi_v<float> * u;
+  const float up = glm::radians(kLow + (kHigh - kLow) * 0.5f * (1.0f - std::cos(around)));
+  return {std::cos(up) * std::sin(around), std::sin(up), std::cos(up) * std::cos(around)};
+}
+
+}  // namespace
+
+CameraPath inspection_path(const Aabb& target, const PathParams& params, float fov_y_deg, float aspect, float fill) {
+  if (target.empty()) fail("inspection path", "the target has no bounds");
+  if (params.frames < 1) fail("inspection path", "needs at least one frame");
+  const Vec3 c = target.center();
+  const float r = std::max(glm::length(target.size()) / 2, 1e-6f);
+  const float tan_y = fill * std::tan(glm::radians(fov_y_deg) / 2), tan_x = tan_y * aspect;
+  // One distance for the whole path (no zooming): the least at which the box fits every frame.
+  // Farther than r / sin(atan(tan_y)) the bounding sphere fits, so the box does too.
+  const float far = 1.001f * r / std::sin(std::atan(tan_y));
+  float R = 0.0f;
+  for (int i = 0; i < params.frames; ++i) {
+    const Vec3 out = inspection_direction(float(i) / float(params.frames));
+    float lo = 0.0f, hi = far;
+    for (int step = 0; step < 32 && R < hi; ++step) {
+      const float mid = 0.5f * (lo + hi);
+      (box_in_view(target, c + mid * out, -out, tan_x, tan_y) ? hi : lo) = mid;
+    }
+    R = std::max(R, hi);
+  }
+  CameraPath path;
+  for (int i = 0; i < params.frames; ++i) {
+    PathFrame f;
+    f.time = i / params.fps;
+    f.position = c + R * inspection_direction(float(i) / float(params.frames));
+    aim_at(f, c);
+    path.frames.push_back(f);
   }
   return path;
 }

@@ -6,6 +6,7 @@
 
 #include <cstdint>
 
+#include "cellwalk/core/camera_path.hpp"
 #include "cellwalk/scene/scene.hpp"
 #include "cellwalk/store/world.hpp"
 
@@ -57,4 +58,11 @@ PlannedSpace plan_free_space(const World& world, const PlannerOptions& options =
 // writes around its models lies wholly outside them.
 bool nav_lies_in_world(const World& world);
 
+// How much of each frame of `path` shows the world: the fraction of a columns × rows grid of
+// rays through the image (rows from lens.aspect), cast from the eye with Embree against every
+// object's level 0 between the near and far planes, that hit something. A ray-cast, not a
+// render: it needs no GL and agrees with the image to the grid's resolution.
+std::vector<float> view_coverage(const World& world, const CameraPath& path, const Camera& lens, int columns = 64);
+
 }  // namespace cellwalk
+

@@ -101,14 +101,23 @@ struct RenderStats {
   double ms = 0.0;                  // wall time including glFinish
 };
 
+struct RenderSettings;
+// Fits the backdrop to a world: the ground at its lowest point, the grid a power of ten near a
+// tenth of its larger horizontal extent E, at most 10 m (10 m for a city, 10 cm for a 1 m
+// scan), the haze at 30 E.
+void fit_backdrop(RenderSettings& settings, const Aabb& world_bounds);
+
 struct RenderSettings {
   int width = 640;
   int height = 480;
   Rgba8 background = rgba8(178, 204, 230);
   // Draw a backdrop instead of the flat background: a sky gradient above the horizon and a
-  // ground plane (y = 0) with a faint 10 m grid below it, so a walker sees where the ground
-  // is. Colour only: the id target stays background and depth is untouched.
+  // ground plane (y = ground_y) with a faint grid of ground_grid metres below it, so a walker
+  // sees where the ground is. Colour only: the id target stays background and depth is untouched.
   bool backdrop = false;
+  float ground_y = 0.0f;
+  float ground_grid = 10.0f;
+  float ground_haze = 3000.0f;  // distance at which the ground fades into the sky, metres
   // GPU-side vertex and index buffers are cached under this many bytes (LRU). A mesh larger
   // than the whole budget is drawn from a transient buffer and not kept.
   uint64_t gpu_budget_bytes = 512ull << 20;
