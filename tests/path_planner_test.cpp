@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -17,6 +18,9 @@
 #include "cellwalk/scene/import.hpp"
 #include "cellwalk/scene/scene_file.hpp"
 #include "cellwalk/scene/path_generator.hpp"
+#include "cellwalk/runtime/walk.hpp"
+#include "cellwalk/runtime/strategies.hpp"
+#include "cellwalk/render/renderer.hpp"
 #include "precompute/embree_scene.hpp"
 #include "test_support.hpp"
 
@@ -192,6 +196,37 @@ TEST(PathPlanner, BunnyOnAGroundEveryKindKeepsTheClearanceAndSeesTheBunny) {
   EXPECT_GE(5 * seen_all, frames_all);  // at least 20 %
 }
 
+// The share of each frame showing the world by rays (view_coverage) against the share of
+// pixels with an object id in the rendered image, on the inspection path around the bunny:
+// the model is in view in every frame, and the two measures agree to the ray grid's resolution.
+TEST(PathPlanner, ViewCoverageAgreesWithTheRenderedImage) {
+  test::TempDir dir;
+  std::vector<Object> bunny = import_model(test::cgal_mesh("bunny00.off"));
+  const World world(test::write_world(dir, bunny, {}, "bunny_alone"));
+  PathParams p;
+  p.frames = 12;
+  const CameraPath path = inspection_path(world.info().bounds, p);
+  Camera lens;
+  lens.aspect = 4.0f / 3.0f;
+  const std::vector<float> rays = view_coverage(world, path, lens, 128);
+  ASSERT_EQ(rays.size(), path.frames.size());
+  auto context = GlContext::headless();
+  RenderSettings settings;
+  settings.width = 256;
+  settings.height = 192;
+  Renderer renderer(settings);
+  auto brute = make_strategy("brute", world, {});
+  for (size_t i = 0; i < path.frames.size(); ++i) {
+    Camera cam = lens;
+    apply(path.frames[i], cam);
+    render_frame(*brute, renderer, cam);
+    const IdImage ids = renderer.read_ids();
+    const double drawn = double(std::count_if(ids.ids.begin(), ids.ids.end(), [](uint32_t id) { return id != kBackgroundId; })) / ids.ids.size();
+    EXPECT_GT(drawn, 0.05) << "frame " << i;
+    EXPECT_NEAR(rays[i], drawn, 0.01) << "frame " << i;
+  }
+}
+
 TEST(PathPlanner, RoomWithADoorwayEveryKindKeepsTheClearanceAndTheGraphGoesInside) {
   test::TempDir dir;
   const World world(room_world(dir));
@@ -286,6 +321,35 @@ TEST(PathPlanner, TheCommandPlansWhenTheWorldsGraphIsAnImportLoop) {
   }
   // A scene file cannot be planned on: it is not built.
   r = test::run_cellwalk("path " + scene + " --planner -o " + path);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("cellwalk build"), std::string::npos) << r.output;
+}
+
+// Issue 16: the bunny was in view on 8 of 90 frames of its import's path. An inspection path,
+// and a planned flight that looks at the model, keep it in view on every frame.
+TEST(PathPlanner, TheCommandMakesPathsThatKeepAModelInView) {
+  test::TempDir dir;
+  const std::string scene = dir.file("b.cwscene"), world = dir.file("b.cww"), path = dir.file("b.path");
+  for (const std::string& command : {"import " + test::cgal_mesh("bunny00.off") + " -o " + scene, "build " + scene + " -o " + world}) {
+    const auto r = test::run_cellwalk(command);
+    ASSERT_EQ(r.exit_code, 0) << command << "\n" << r.output;
+  }
+  for (const std::string args : {" --kind inspect --frames 90", " --kind inspect --frames 40 --around bunny00#3",
+                                  " --kind inspect --frames 40 --around 5", " --frames 90 --look-at centre"}) {
+    const auto r = test::run_cellwalk("path " + world + args + " --coverage -o " + path);
+    ASSERT_EQ(r.exit_code, 0) << args << "\n" << r.output;
+    const std::string frames = args.find("40") != std::string::npos ? "40" : "90";
+    EXPECT_NE(r.output.find("in view (>= 1 % of the image) on " + frames + " of " + frames + " frames"), std::string::npos)
+        << args << "\n" << r.output;
+    EXPECT_EQ(read_path(path).frames.size(), size_t(std::stoi(frames)));
+  }
+  for (const char* args : {" --kind inspect --around nothing", " --kind inspect --around 99", " --around 1",
+                           " --look-at 1,2", " --look-at 1,2,inf", " --kind inspect --planner"}) {
+    const auto r = test::run_cellwalk("path " + world + std::string(args) + " -o " + path);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+  }
+  const auto r = test::run_cellwalk("path " + scene + " --kind inspect --coverage -o " + path);
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("cellwalk build"), std::string::npos) << r.output;
 }

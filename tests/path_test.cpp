@@ -173,5 +173,61 @@ TEST(Path, UnknownKindAndEmptyGraphAreErrors) {
   EXPECT_THROW(generate_path(NavGraph{}, PathParams{}), Error);
 }
 
+// Issue 16: paths only knew streets. The inspection path keeps the whole box inside the view
+// of every frame, within 90 % of its half-angles, at one distance that is the least that does
+// (5 % nearer, some frame cuts it).
+TEST(Path, InspectionKeepsTheWholeBoxInViewAtTheLeastDistance) {
+  const Aabb boxes[] = {{{-0.5f, -0.5f, -0.4f}, {0.5f, 0.5f, 0.4f}},   // a scan
+                        {{0, 0, 0}, {400, 30, 300}},                   // a flat plant
+                        {{-2, 0, -2}, {2, 80, 2}},                      // a tower
+                        {{-1e-3f, 7, 3}, {1e-3f, 7.002f, 3.002f}}};     // a tiny part, off the origin
+  for (const Aabb& box : boxes) {
+    PathParams p;
+    p.frames = 240;
+    const CameraPath path = inspection_path(box, p);
+    ASSERT_EQ(path.frames.size(), 240u);
+    const float R = glm::distance(path.frames[0].position, box.center());
+    float least_yaw = 1e9f, most_yaw = -1e9f;
+    Camera inner;  // the default lens narrowed to 90 % of its half-angles
+    inner.fov_y_deg = glm::degrees(2 * std::atan(0.9f * std::tan(glm::radians(30.0f))));
+    inner.near_plane = R * 1e-3f;
+    inner.far_plane = R * 1e3f;
+    for (const PathFrame& f : path.frames) {
+      Camera cam = inner;
+      apply(f, cam);
+      EXPECT_EQ(Frustum(cam).classify(box), Containment::kInside);
+      EXPECT_NEAR(glm::distance(f.position, box.center()), R, R * 1e-4f);
+      EXPECT_NEAR(glm::dot(cam.forward(), glm::normalize(box.center() - f.position)), 1.0f, 1e-4f) << "aimed at the centre";
+      const float elevation = glm::degrees(std::asin((f.position.y - box.center().y) / R));
+      EXPECT_GE(elevation, 10.0f - 0.01f);
+      EXPECT_LE(elevation, 35.0f + 0.01f);
+      least_yaw = std::min(least_yaw, f.yaw_deg);
+      most_yaw = std::max(most_yaw, f.yaw_deg);
+    }
+    EXPECT_GT(most_yaw - least_yaw, 350.0f) << "once around";
+    bool cut = false;
+    for (const PathFrame& f : path.frames) {
+      PathFrame nearer = f;
+      nearer.position = box.center() + 0.95f * (f.position - box.center());
+      Camera cam = inner;
+      apply(nearer, cam);
+      cut |= Frustum(cam).classify(box) != Containment::kInside;
+    }
+    EXPECT_TRUE(cut) << "the distance is the least that keeps the box in view";
+  }
+  EXPECT_THROW(inspection_path(Aabb{}, PathParams{}), Error);
+}
+
+TEST(Path, AimAtLooksAtThePoint) {
+  for (const Vec3 target : {Vec3(3, 1, -2), Vec3(-5, -4, 7), Vec3(0, 10, 0.01f)}) {
+    PathFrame f;
+    f.position = Vec3(1, 2, 3);
+    aim_at(f, target);
+    Camera cam;
+    apply(f, cam);
+    EXPECT_NEAR(glm::dot(cam.forward(), glm::normalize(target - f.position)), 1.0f, 1e-5f);
+  }
+}
+
 }  // namespace
 }  // namespace cellwalk

@@ -583,6 +583,33 @@ TEST_F(RendererTest, FarFaceTexturesStayUnderTheirBudget) {
   EXPECT_THROW(roomy.render(test_camera(), {}, meshes.provider(), mismatched), Error);
 }
 
+// Issue 16: the backdrop's ground was at y = 0 whatever the world, so below it the view showed
+// sky above and below. Fitted to a world whose floor is at y = -181, a camera just above that
+// floor looking down sees ground; one below it sees sky.
+TEST_F(RendererTest, BackdropGroundLiesAtTheWorldsFloor) {
+  RenderSettings s = settings();
+  s.backdrop = true;
+  fit_backdrop(s, Aabb{{-370, -181, -200}, {370, 150, 200}});
+  EXPECT_EQ(s.ground_y, -181.0f);
+  EXPECT_EQ(s.ground_grid, 10.0f);
+  Renderer renderer(s);
+  Meshes none;
+  const auto centre_is_ground = [&](float eye_y) {
+    Camera cam = test_camera();
+    cam.position = Vec3(0, eye_y, 0);
+    cam.pitch_deg = -60;
+    renderer.render(cam, {}, none.provider());
+    const Image color = renderer.read_color();
+    const uint8_t* c = &color.rgba[(size_t(kHeight / 2) * kWidth + kWidth / 2) * 4];
+    return c[2] < c[1] + 10;  // earth is grey-green; the sky is blue
+  };
+  EXPECT_TRUE(centre_is_ground(-179.3f));
+  EXPECT_FALSE(centre_is_ground(-182.0f));
+  RenderSettings scan;
+  fit_backdrop(scan, Aabb{{-0.5f, 0, -0.5f}, {0.5f, 1, 0.5f}});
+  EXPECT_FLOAT_EQ(scan.ground_grid, 0.1f);
+}
+
 TEST(WritePng, WritesAValidTopDownPng) {
   test::TempDir dir;
   std::string file = dir.file("out.png");

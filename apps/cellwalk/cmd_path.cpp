@@ -169,11 +169,10 @@ void register_path(CLI::App& root) {
     if (!args->around.empty() && args->kind != "inspect") fail("--around", "goes with --kind inspect");
     if (args->coverage && !is_world_file(args->scene)) fail("--coverage", "needs a world file (cellwalk build)");
     const SceneInfo info = is_world_file(args->scene) ? World(args->scene).info() : SceneReader(args->scene).info();
+    const std::optional<Vec3> look_at = args->look_at.empty() ? std::nullopt : std::optional(look_at_point(args->look_at, info));
     CameraPath path = make_path(*args, info);
-    if (!args->look_at.empty()) {
-      const Vec3 target = look_at_point(args->look_at, info);
-      for (PathFrame& f : path.frames) aim_at(f, target);
-    }
+    if (look_at)
+      for (PathFrame& f : path.frames) aim_at(f, *look_at);
     path.world = path_world(info);
     write_path(path, args->out);
     std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(),

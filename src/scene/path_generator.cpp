@@ -225,6 +225,7 @@ CameraPath inspection_path(const Aabb& target, const PathParams& params, float f
     }
     R = std::max(R, hi);
   }
+  R *= 1.002f;  // the search's last step and the frustum planes' rounding, so the fit holds as drawn
   CameraPath path;
   for (int i = 0; i < params.frames; ++i) {
     PathFrame f;
