@@ -48,8 +48,9 @@ class ViewerTest : public ::testing::Test {
       FAIL() << "xvfb-run is missing: run scripts/setup (package xvfb)";
     scene_ = test::write_street_world(dir_, 30);
   }
-  test::CommandResult view(const std::string& args) {
-    const std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + test::cellwalk_binary() +
+  // `wrapper` runs before the binary inside the X server (e.g. "timeout -s TERM 5").
+  test::CommandResult view(const std::string& args, const std::string& wrapper = "") {
+    const std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + wrapper + " " + test::cellwalk_binary() +
                                 " view " + scene_ + " --width 320 --height 240 " + args + " 2>&1";
     test::CommandResult r;
     FILE* pipe = popen(command.c_str(), "r");
@@ -110,6 +111,26 @@ TEST_F(ViewerTest, ReplayedPathIsRecordedBackFaithfully) {
     EXPECT_NEAR(glm::distance(in.frames[i].position, out.frames[i].position), 0.0f, 1e-4f);
     EXPECT_NEAR(in.frames[i].yaw_deg, out.frames[i].yaw_deg, 1e-3f);
   }
+}
+
+// Issue 16: --replay without --frames never ended, and a run ended by a signal wrote no
+// screenshot.
+TEST_F(ViewerTest, ReplayEndsAtThePathsEndAndWritesItsScreenshot) {
+  PathParams p;
+  p.frames = 7;
+  World scene(scene_);
+  write_path(generate_path(scene.info().nav, p), dir_.file("in.path"));
+  const auto r = view("--replay " + dir_.file("in.path") + " --record " + dir_.file("out.path") + " --screenshot " +
+                      dir_.file("end.png") + " --strategy lod --budget 64");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_EQ(read_path(dir_.file("out.path")).frames.size(), 7u);
+  EXPECT_GT(distinct_colours(load_png(dir_.file("end.png"))), 10);
+}
+
+TEST_F(ViewerTest, ASignalEndsTheRunAndTheScreenshotIsStillWritten) {
+  const auto r = view("--screenshot " + dir_.file("last.png"), "timeout -s TERM 6");
+  EXPECT_EQ(r.exit_code, 124) << "ended by the signal: " << r.output;
+  EXPECT_GT(distinct_colours(load_png(dir_.file("last.png"))), 10) << r.output;
 }
 
 TEST_F(ViewerTest, NoDisplayGivesAClearError) {

@@ -14,6 +14,7 @@ void register_view(CLI::App& root) {
   struct Args {
     std::string scene;
     ViewerOptions options;
+    double budget_mib = 0;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("world", args->scene, "World file (.cww)")->required();
@@ -22,11 +23,15 @@ void register_view(CLI::App& root) {
   cmd->add_option("--height", args->options.height, "Window height")->capture_default_str()->check(integer_in(16, 8192));
   cmd->add_option("--fov", args->options.fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));
   cmd->add_option("--record", args->options.record_file, "Record the flown path to this file from the start (R stops/starts; default file recorded.path)");
-  cmd->add_option("--replay", args->options.replay_file, "Follow this path file instead of the keyboard");
+  cmd->add_option("--replay", args->options.replay_file, "Follow this path file instead of the keyboard, to its end (or --frames)");
   cmd->add_option("--frames", args->options.max_frames, "Quit after this many frames (0 = run until closed)")->capture_default_str()->check(integer_in(0, 100000000));
   cmd->add_option("--screenshot", args->options.screenshot_file, "Write the last frame to this PNG on exit");
   cmd->add_flag("--birds-eye", args->options.birds_eye, "Start in the bird's-eye view");
+  cmd->add_option("--budget", args->budget_mib,
+                  "Memory budget, MiB (0 = none): the strategy's store and the GPU cache, split as walk splits it")
+      ->capture_default_str()->check(number_in(0, 1 << 24));
   cmd->callback([args] {
+    args->options.budget_bytes = static_cast<uint64_t>(args->budget_mib * 1024 * 1024);
     refuse_same_files({args->scene, args->options.replay_file}, {args->options.record_file, args->options.screenshot_file});
     World world(args->scene);
     run_viewer(world, args->options);

@@ -64,6 +64,9 @@ void require_gl_45() {
   GLint major = 0, minor = 0;
   glGetIntegerv(GL_MAJOR_VERSION, &major);
   glGetIntegerv(GL_MINOR_VERSION, &minor);
+  if (major == 0)
+    fail(kWhere, "no OpenGL context is current; make one first with GlContext::headless() (no window: EGL "
+                 "surfaceless, set EGL_PLATFORM=surfaceless) or a Window, and keep it alive while drawing");
   if (major * 10 + minor < 45) {
     fail(kWhere, "needs OpenGL 4.5, the current context has " + std::to_string(major) + "." +
                      std::to_string(minor));

@@ -5,9 +5,12 @@
 #include <GLFW/glfw3.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
 
 #include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/runtime/run_budget.hpp"
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/render/window.hpp"
@@ -17,8 +20,9 @@
 namespace cellwalk {
 namespace {
 
-constexpr float kEyeHeight = 1.7f;
-constexpr float kWalkSpeed = 3.0f;      // metres per second; Shift multiplies by kRunFactor
+constexpr float kEyeHeight = 1.7f;      // metres above the world's floor, at most half its height
+constexpr float kWalkSpeed = 3.0f;      // metres per second, at most a twentieth of the world's
+                                        // extent a second; Shift multiplies by kRunFactor
 constexpr float kRunFactor = 6.0f;
 constexpr float kMouseDegPerPixel = 0.15f;
 
@@ -62,6 +66,7 @@ Camera birds_eye_camera(const Aabb& bounds, const Camera& lens) {
 
 struct ViewerState {
   Camera camera;
+  float floor_y = 0.0f, eye_height = kEyeHeight, walk_speed = kWalkSpeed;  // fitted to the world
   bool fly = false;
   bool birds_eye = false;
   bool recording = false;
@@ -73,7 +78,7 @@ struct ViewerState {
 };
 
 void move(ViewerState& s, const Window& window, float dt) {
-  float speed = kWalkSpeed * (window.key_down(GLFW_KEY_LEFT_SHIFT) ? kRunFactor : 1.0f) * dt;
+  float speed = s.walk_speed * (window.key_down(GLFW_KEY_LEFT_SHIFT) ? kRunFactor : 1.0f) * dt;
   Vec3 forward = s.camera.forward(), right = s.camera.right();
   if (!s.fly) forward = glm::normalize(Vec3(forward.x, 0, forward.z));
   Vec3 step(0.0f);
@@ -86,7 +91,7 @@ void move(ViewerState& s, const Window& window, float dt) {
   if (window.key_down(GLFW_KEY_LEFT)) s.camera.yaw_deg += 90.0f * dt;
   if (window.key_down(GLFW_KEY_RIGHT)) s.camera.yaw_deg -= 90.0f * dt;
   if (glm::length(step) > 0) s.camera.position += glm::normalize(step) * speed;
-  if (!s.fly) s.camera.position.y = kEyeHeight;
+  if (!s.fly) s.camera.position.y = s.floor_y + s.eye_height;
 }
 
 std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, const std::string& strategy) {
@@ -104,19 +109,52 @@ std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, 
   return text;
 }
 
+// screenshot-N.png in the working folder, N the first number whose file does not exist.
+std::string unused_screenshot_name() {
+  for (int n = 1;; ++n) {
+    const std::string name = "screenshot-" + std::to_string(n) + ".png";
+    if (!std::filesystem::exists(name)) return name;
+  }
+}
+
+// SIGINT and SIGTERM end the frame loop instead of the process, so what a run was asked to
+// write (screenshot, recording) is still written; the previous handlers come back after.
+class StopOnSignals {
+ public:
+  StopOnSignals() {
+    flag_ = 0;
+    previous_int_ = std::signal(SIGINT, on_signal);
+    previous_term_ = std::signal(SIGTERM, on_signal);
+  }
+  ~StopOnSignals() {
+    std::signal(SIGINT, previous_int_);
+    std::signal(SIGTERM, previous_term_);
+  }
+  bool requested() const { return flag_ != 0; }
+
+ private:
+  static void on_signal(int) { flag_ = 1; }
+  static inline volatile std::sig_atomic_t flag_ = 0;
+  void (*previous_int_)(int);
+  void (*previous_term_)(int);
+};
+
 }  // namespace
 
 void run_viewer(const World& scene, const ViewerOptions& options) {
   Window window(options.width, options.height, "cellwalk — " + scene.file().path(), options.max_frames == 0);
   int fb_width, fb_height;
   window.framebuffer_size(fb_width, fb_height);
+  const RunBudget budget = split_run_budget(options.budget_bytes, 0, std::nullopt);
   StrategyOptions strategy_options;
   strategy_options.viewport_height_px = float(fb_height);
+  strategy_options.memory_budget_bytes = budget.strategy_bytes;
   auto strategy = make_strategy(options.strategy, scene, strategy_options);
   RenderSettings settings;
   settings.width = fb_width;
   settings.height = fb_height;
   settings.backdrop = true;
+  if (budget.total_bytes > 0) settings.gpu_budget_bytes = budget.gpu_bytes;
   fit_backdrop(settings, scene.info().bounds);
   auto renderer = std::make_unique<Renderer>(settings);
 
@@ -125,6 +163,12 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
   s.camera.fov_y_deg = options.fov_y_deg;
   s.camera.aspect = float(fb_width) / float(fb_height);
   place_at_start(scene.info(), s.camera);
+  // A walker in a 1 m scan or a 10 km plant: eye height and speed follow the world's size, the
+  // floor is its lowest point (the backdrop's ground, fit_backdrop).
+  const Aabb& world_box = scene.info().bounds;
+  s.floor_y = world_box.min.y;
+  s.eye_height = std::min(kEyeHeight, std::max(world_box.size().y / 2, 1e-3f));
+  s.walk_speed = std::min(kWalkSpeed, std::max(std::max(world_box.size().x, world_box.size().z) / 20, 1e-3f));
   CameraPath replay;
   if (!options.replay_file.empty()) replay = read_path(options.replay_file);
   const std::string record_file = options.record_file.empty() ? "recorded.path" : options.record_file;
@@ -145,7 +189,7 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
     // Stratified's show styles (§5.1): 1 full, 2 near, 3 far objects, 4 far texture, 5 brute.
     if (key >= GLFW_KEY_1 && key <= GLFW_KEY_5 && is_stratified_strategy_name(options.strategy)) {
       static const char* const kShows[] = {"full", "near", "far-objects", "far-texture", "brute"};
-      strategy = make_strategy(std::string("stratified:show=") + kShows[key - GLFW_KEY_1], scene, {});
+      strategy = make_strategy(std::string("stratified:show=") + kShows[key - GLFW_KEY_1], scene, strategy_options);
     }
     if (key == GLFW_KEY_R) {
       if (s.recording) save_recording();
@@ -178,8 +222,10 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
   double fps = 0;
   std::vector<LineSegment> boxes;
   for (ObjectId id = 0; id < scene.object_count(); ++id) append_box_lines(scene.object(id).bounds, rgba8(40, 40, 40), boxes);
-  for (int frame = 0; !window.should_close(); ++frame) {
+  const StopOnSignals stop;
+  for (int frame = 0; !window.should_close() && !stop.requested(); ++frame) {
     if (options.max_frames > 0 && frame >= options.max_frames) break;
+    if (!replay.frames.empty() && options.max_frames == 0 && size_t(frame) >= replay.frames.size()) break;
     const double dt = std::min(clock.lap_ms() / 1000.0, 0.25);
     s.clock += frame == 0 ? 0.0 : dt;
     window.poll_events();
@@ -210,7 +256,9 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
     window.framebuffer_size(w, h);
     renderer->present(w, h);
     if (s.screenshot_requested) {
-      write_png(renderer->read_color(), "screenshot.png");
+      const std::string file = unused_screenshot_name();
+      write_png(renderer->read_color(), file);
+      std::printf("view: wrote %s\n", file.c_str());
       s.screenshot_requested = false;
     }
     window.swap_buffers();

@@ -18,9 +18,13 @@ struct ViewerOptions {
   int max_frames = 0;           // quit after this many frames (0 = run until closed)
   std::string screenshot_file;  // if set, the last frame is written here as PNG
   bool birds_eye = false;       // start in the bird's-eye view
+  uint64_t budget_bytes = 0;    // memory budget of the strategy and the GPU cache (0: none);
+                                // split as a walk's (run_budget.hpp)
 };
 
-// Runs until the window is closed, Escape is pressed or max_frames is reached.
+// Runs until the window is closed, Escape is pressed, max_frames is reached, a replayed path
+// ends or the process gets SIGINT or SIGTERM (the screenshot and the recording are still
+// written). P writes screenshot-N.png in the working folder, N the first number not taken.
 // Keys: W/A/S/D move, Q/E down/up (fly), mouse drag looks, Shift runs, F walk/fly,
 // B bird's-eye view (what the walker is shown, seen from above, with its frustum and, for
 // stratified, its viewcell and bounding box), R starts/stops recording, P saves a screenshot,

@@ -1,0 +1,40 @@
+#!/usr/bin/env bash
+# Issue 16, item 7: cellwalk used from another project. Installs the build into a clean
+# prefix, builds examples/render_city against the installed package (find_package), runs it;
+# checks the pkg-config file compiles and links the same program; makes the .deb with CPack and
+# runs `cellwalk --version` from its contents.
+#   install_test.sh SOURCE_DIR BUILD_DIR
+set -euo pipefail
+src=$1 build=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+prefix=$work/prefix
+
+cmake --install "$build" --prefix "$prefix" >/dev/null
+test -x "$prefix/bin/cellwalk"
+test -f "$prefix/include/cellwalk/runtime/walk.hpp"
+test -f "$prefix/lib/cmake/cellwalk/cellwalkConfig.cmake"
+
+launcher=""
+command -v ccache >/dev/null && launcher="-DCMAKE_CXX_COMPILER_LAUNCHER=ccache"
+cmake -S "$src/examples/render_city" -B "$work/example" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_PREFIX_PATH="$prefix" $launcher >/dev/null
+ninja -C "$work/example" >/dev/null
+# The example must not have found the build tree's headers: only the prefix was given.
+if grep -q -- "-I$src/include" "$work/example/build.ninja"; then echo "example compiled against the source tree"; exit 1; fi
+mkdir "$work/out"
+EGL_PLATFORM=surfaceless "$work/example/render_city" "$work/out" 60
+test -s "$work/out/city.png"
+
+# pkg-config: the same program, by hand.
+PKG_CONFIG_PATH="$prefix/lib/pkgconfig" c++ -O0 "$src/examples/render_city/main.cpp" -o "$work/by_pkgconfig" \
+  $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs cellwalk)
+EGL_PLATFORM=surfaceless "$work/by_pkgconfig" "$work/out" 30 >/dev/null
+
+# The Debian package: made by CPack, unpacked (installing it needs root), its CLI runs.
+(cd "$work" && cpack --config "$build/CPackConfig.cmake" -B "$work/deb" >/dev/null)
+deb=$(ls "$work"/deb/cellwalk_*.deb)
+dpkg-deb --info "$deb" | grep -q "Depends:.*libembree"
+dpkg-deb -x "$deb" "$work/unpacked"
+"$work/unpacked/usr/bin/cellwalk" --version | grep -q "^cellwalk 0\."
+echo "install: prefix, find_package, pkg-config and .deb ($(du -h "$deb" | cut -f1)) all work"
