@@ -265,6 +265,14 @@ TEST_F(HostileCli, PathFileOfAnotherVersionOrADirectoryIsRefused) {
   }
 }
 
+// Issue 16: `walk x.cwscene` said "bad magic". A scene where a world is wanted, and a world
+// where a scene is wanted, say which file it is and what to do.
+TEST_F(HostileCli, SceneAndWorldFilesSwappedSayWhatToDo) {
+  refused("walk " + scene_ + " --path " + path_ + " -o " + dir_->file("w"), {scene_, "is a scene file", "cellwalk build"});
+  refused("info " + path_, {path_, "not a cellwalk scene file", "cellwalk generate or import"});
+  refused("build " + world_ + " -o " + dir_->file("again.cww"), {world_, "is a world file"});
+}
+
 // --- 10. a full disk, a UTF-16 model, a small budget ----------------------------------------
 
 TEST_F(HostileCli, WalkOnAFullDiskLeavesNoEmptyFolder) {

@@ -95,8 +95,7 @@ TEST(HttpReadSource, AWorldByUrlIsTheWorldFromItsFile) {
     const test::CommandResult r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.path") + " --strategy brute -o " +
                                                      dir.file(out) + " --json");
     EXPECT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
-    const nlohmann::json& run = j.is_array() ? j[0] : j.contains("runs") ? j["runs"][0] : j;
+    const nlohmann::json run = test::only_run(r);
     return run["total_triangles"].get<uint64_t>();
   };
   const uint64_t from_url = triangles(web.url("city.cww"), "url"), from_file = triangles(file, "file");

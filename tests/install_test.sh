@@ -34,7 +34,11 @@ EGL_PLATFORM=surfaceless "$work/by_pkgconfig" "$work/out" 30 >/dev/null
 # The Debian package: made by CPack, unpacked (installing it needs root), its CLI runs.
 (cd "$work" && cpack --config "$build/CPackConfig.cmake" -B "$work/deb" >/dev/null)
 deb=$(ls "$work"/deb/cellwalk_*.deb)
-dpkg-deb --info "$deb" | grep -q "Depends:.*libembree"
+# (Outputs are captured first: grep -q stops reading early, and under pipefail the writer's
+# SIGPIPE would fail the test.)
+info=$(dpkg-deb --info "$deb")
+grep -q "Depends:.*libembree" <<<"$info"
 dpkg-deb -x "$deb" "$work/unpacked"
-"$work/unpacked/usr/bin/cellwalk" --version | grep -q "^cellwalk 0\."
+version=$("$work/unpacked/usr/bin/cellwalk" --version)
+grep -q "^cellwalk 0\." <<<"$version"
 echo "install: prefix, find_package, pkg-config and .deb ($(du -h "$deb" | cut -f1)) all work"

@@ -218,11 +218,6 @@ TEST(LiChiangName, PrefetchTimeInTheFrameCycle) {
     EXPECT_THROW(parse_lichiang_strategy_name(bad), Error) << bad;
 }
 
-nlohmann::json summary_of(const test::CommandResult& r) {
-  const size_t start = r.output.find('{');
-  return start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.output.substr(start), nullptr, false);
-}
-
 class LiChiangSystem : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -263,7 +258,7 @@ TEST_F(LiChiangSystem, DrawsEveryVisibleObjectInEachCase) {
     r = test::run_cellwalk("compare " + world_ + " --path " + path_ + " --strategy " + strategy +
                            " --every 3 --width 128 --height 96 --json -o " + out_.file("cmp"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json j = summary_of(r);
+    const nlohmann::json j = test::only_run(r);
     ASSERT_TRUE(j.is_object()) << r.output;
     EXPECT_GT(j["visible_objects"].get<uint64_t>(), 0u);
     EXPECT_EQ(j["missed_objects"].get<uint64_t>(), 0u);
@@ -306,7 +301,7 @@ TEST_F(LiChiangSystem, TheFourCasesHoldTheBudget) {
                                                      " --budget 20 --gpu-budget 1 --width 128 --height 96 --json -o " +
                                                      out_.file("walk"));
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json j = summary_of(r);
+    const nlohmann::json j = test::only_run(r);
     ASSERT_TRUE(j.is_object()) << r.output;
     EXPECT_LE(j["peak_resident_bytes"].get<uint64_t>(), j["strategy_budget_bytes"].get<uint64_t>());
     EXPECT_GT(j["cache_misses"].get<uint64_t>(), 0u);

@@ -205,12 +205,6 @@ class ObjectDatabaseCity : public ::testing::Test {
     db_ = world_ + ".sqlite";
   }
   static void TearDownTestSuite() { delete inputs_; }
-  static nlohmann::json json_of(const test::CommandResult& r) {
-    const size_t start = r.output.find('{');
-    return start == std::string::npos
-               ? nlohmann::json()
-               : nlohmann::json::parse(r.output.substr(start), nullptr, false);
-  }
   static inline test::SharedInputs* inputs_ = nullptr;
   static inline std::string world_, path_, db_;
   const test::TempDir out_;  // this test's outputs
@@ -289,7 +283,7 @@ TEST_F(ObjectDatabaseCity, WalkAndCompareOverTheDatabase) {
                              (with_db ? " --objects-db " + db_ : std::string()) +
                              " --every 4 --width 128 --height 96 --json -o " + out_.file("cmp"));
       ASSERT_EQ(r.exit_code, 0) << r.output;
-      runs[with_db] = json_of(r);
+      runs[with_db] = test::only_run(r);
       ASSERT_TRUE(runs[with_db].is_object()) << r.output;
     }
     const nlohmann::json& a = runs[0].contains("strategies") ? runs[0]["strategies"][0] : runs[0];
@@ -303,7 +297,7 @@ TEST_F(ObjectDatabaseCity, WalkAndCompareOverTheDatabase) {
       " --strategy lichiang:cache=lru,prefetch=none --objects-db " + db_ +
       " --budget 24 --gpu-budget 1 --width 128 --height 96 --json -o " + out_.file("walk"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json j = json_of(r);
+  const nlohmann::json j = test::only_run(r);
   ASSERT_TRUE(j.is_object()) << r.output;
   EXPECT_GT(j["cache_misses"].get<uint64_t>(), 0u);
   EXPECT_LE(j["peak_resident_bytes"].get<uint64_t>(), j["strategy_budget_bytes"].get<uint64_t>());
@@ -331,7 +325,7 @@ TEST_F(ObjectDatabaseCity, DbCommand) {
   EXPECT_NO_THROW(World{world_});
   r = test::run_cellwalk("db " + world_ + " --json -o " + out_.file("copy.sqlite"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json j = json_of(r);
+  const nlohmann::json j = test::json_output(r);
   ASSERT_TRUE(j.is_object()) << r.output;
   EXPECT_EQ(j["objects"].get<uint64_t>(), 150u);
   EXPECT_EQ(j["file_bytes"].get<uint64_t>(), std::filesystem::file_size(out_.file("copy.sqlite")));

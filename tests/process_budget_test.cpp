@@ -56,9 +56,7 @@ Measured walk(const test::TempDir& dir, const BudgetWorld& w, const std::string&
   const test::CommandResult r = test::run_cellwalk("walk " + w.world + " --path " + w.path + " --strategy " + strategy +
                                                    budget + " --width 160 --height 120 --json -o " + out);
   EXPECT_EQ(r.exit_code, 0) << strategy << "\n" << r.output;
-  const size_t start = r.output.find('{');
-  Measured m{start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.output.substr(start), nullptr, false),
-             r.max_rss_bytes};
+  Measured m{test::only_run(r), r.max_rss_bytes};
   if (!m.summary.is_object()) ADD_FAILURE() << "no JSON summary: " << r.output;
   return m;
 }

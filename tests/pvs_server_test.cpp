@@ -402,8 +402,7 @@ TEST_F(PvsStreamClientTest, WalkStreamsTheWorld) {
                                                    " --strategy pvs-stream:latency_ms=5,pace=0 -o " + out.file("walk") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("pvs-stream"), std::string::npos) << r.output;
-  const nlohmann::json j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
-  const nlohmann::json& run = j.is_array() ? j[0] : j.contains("runs") ? j["runs"][0] : j;
+  const nlohmann::json run = test::only_run(r);
   ASSERT_TRUE(run.contains("strategy_counters")) << r.output;
   EXPECT_GE(run["strategy_counters"]["transactions"].get<double>(), 1.0) << r.output;
   EXPECT_GT(run["strategy_counters"]["bytes_received"].get<double>(), 0.0) << r.output;

@@ -542,7 +542,7 @@ TEST(ReviewStrategy, WalkAndCompareFromTheCommandLine) {
   r = test::run_cellwalk("walk " + world + " --path " + path + " --strategy review:depth=80 --budget 8 --json -o " +
                          dir.file("walk") + " --width 64 --height 48");
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  const auto j = test::only_run(r);
   EXPECT_LE(j["peak_resident_bytes"].get<uint64_t>(), 8u << 20);
   r = test::run_cellwalk("compare " + world + " --path " + path + " --strategy review-box:depth=80 -o " +
                          dir.file("cmp") + " --width 64 --height 48");

@@ -339,14 +339,14 @@ TEST(HdovSceneTreeStrategies, WalkAndCompareThroughTheCli) {
                            " --budget 8 --polygon-budget 2000 --eta 0.001 --width 64 --height 48 --json -o " +
                            dir.file(strategy));
     ASSERT_EQ(r.exit_code, 0) << strategy << ": " << r.output;
-    const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+    const auto j = test::only_run(r);
     EXPECT_LE(j["peak_resident_bytes"].get<uint64_t>(), 8ull << 20) << strategy;
   }
   // CONV draws what brute draws: no pixel differs from ground truth.
   r = test::run_cellwalk("compare " + world + " --path " + path + " --strategy conv --every 4 --width 64 --height 48 --json -o " +
                          dir.file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto j = nlohmann::json::parse(r.output.substr(r.output.find('{')));
+  const auto j = test::only_run(r);
   EXPECT_EQ(j["mean_differing_fraction"].get<double>(), 0.0);
 }
 

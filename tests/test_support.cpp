@@ -62,6 +62,19 @@ std::string cellwalk_binary() {
   return other && *other ? other : CELLWALK_BINARY;
 }
 
+nlohmann::json json_output(const CommandResult& r) {
+  const size_t start = r.output.find('{');
+  if (start == std::string::npos) return nullptr;
+  nlohmann::json j = nlohmann::json::parse(r.output.substr(start), nullptr, false);
+  return j.is_discarded() ? nlohmann::json() : j;
+}
+
+nlohmann::json only_run(const CommandResult& r) {
+  const nlohmann::json j = json_output(r);
+  if (!j.is_object() || !j.contains("runs") || !j["runs"].is_array() || j["runs"].size() != 1) return nullptr;
+  return j["runs"][0];
+}
+
 CommandResult run_cellwalk(const std::string& args) {
   CommandResult result;
   // Appended piece by piece: GCC 12 misreads `std::string(literal) + ...` as out of bounds.

@@ -1,6 +1,8 @@
 // Helpers shared by the tests: real data paths, temporary folders, the cellwalk binary.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <filesystem>
 #include <cstdint>
 #include <string>
@@ -52,6 +54,11 @@ struct CommandResult {
   std::string output;          // stdout and stderr together
   uint64_t max_rss_bytes = 0;  // the command's peak resident memory, from the kernel (wait4)
 };
+// The JSON a command printed with --json (docs/json.md: one object, from the first '{' of the
+// output on); null when there is none or it does not parse.
+nlohmann::json json_output(const CommandResult& r);
+// Of a walk's or a compare's JSON, the summary of its only run ("runs"[0]); null when absent.
+nlohmann::json only_run(const CommandResult& r);
 // The cellwalk binary the tests run: this build's, or $CELLWALK_BINARY when set (to run the
 // command tests against another build, e.g. the one before a fix).
 std::string cellwalk_binary();

@@ -13,11 +13,6 @@
 namespace cellwalk {
 namespace {
 
-nlohmann::json json_of(const test::CommandResult& r) {
-  const size_t start = r.output.find('{');
-  return start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.output.substr(start), nullptr, false);
-}
-
 // The cow imported as a world and built as a VDR model, with the thesis's orbit around it.
 class VdrStrategyTest : public ::testing::Test {
  protected:
@@ -55,7 +50,7 @@ TEST_F(VdrStrategyTest, WalkStreamsTheModel) {
   const test::CommandResult r = test::run_cellwalk("walk " + file("cow.cww") + " --path " + file("orbit.path") +
                                                    " --strategy vdr:latency_ms=5,pace=0 --json -o " + file("walk") + lens);
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const nlohmann::json j = json_of(r);
+  const nlohmann::json j = test::only_run(r);
   const nlohmann::json& run = j.is_array() ? j[0] : j.contains("runs") ? j["runs"][0] : j;
   ASSERT_TRUE(run.contains("strategy_counters")) << r.output;
   const nlohmann::json& c = run["strategy_counters"];
@@ -75,7 +70,7 @@ TEST_F(VdrStrategyTest, ComparedPictureFollowsTau) {
                                                      " --strategy vdr:pace=0,tau=" + tau + " --every 8 --images 0 --json -o " +
                                                      file("cmp" + tau) + lens);
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json j = json_of(r);
+    const nlohmann::json j = test::only_run(r);
     ASSERT_TRUE(j.is_object()) << r.output;
     const nlohmann::json& s = j.contains("summary") ? j["summary"] : j.contains("runs") ? j["runs"][0] : j;
     ASSERT_TRUE(s.contains("mean_psnr_db")) << r.output;

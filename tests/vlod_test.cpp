@@ -29,10 +29,6 @@ namespace {
 
 using visibility::CellLodRule;
 
-nlohmann::json summary_of(const test::CommandResult& r) {
-  const size_t start = r.output.find('{');
-  return start == std::string::npos ? nlohmann::json() : nlohmann::json::parse(r.output.substr(start), nullptr, false);
-}
 
 // A small city with real LOD chains, built once for the suite.
 class VlodCity : public ::testing::Test {
@@ -173,7 +169,7 @@ TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
   r = test::run_cellwalk("compare " + world + " --path " + path + " --strategy vlod --every 2 --width 96 --height 72 --json -o " +
                          out_.file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  const auto fidelity = summary_of(r);
+  const auto fidelity = test::only_run(r);
   ASSERT_TRUE(fidelity.is_object()) << r.output;
   EXPECT_GT(fidelity["visible_objects"].get<uint64_t>(), 0u);
   EXPECT_EQ(fidelity["missed_objects"].get<uint64_t>(), 0u) << r.output;
@@ -183,7 +179,7 @@ TEST_F(VlodCity, WalkMissesNoVisibleObjectAndDrawsCoarserLevels) {
     r = test::run_cellwalk("walk " + world + " --path " + path + " --strategy " + strategy +
                            " --budget 48 --width 96 --height 72 --json -o " + out_.file("walk-" + strategy));
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const auto j = summary_of(r);
+    const auto j = test::only_run(r);
     ASSERT_TRUE(j.is_object()) << r.output;
     EXPECT_LE(j["peak_resident_bytes"].get<uint64_t>(), j["strategy_budget_bytes"].get<uint64_t>()) << strategy;
     triangles[k++] = j["total_triangles"].get<uint64_t>();
@@ -341,7 +337,7 @@ TEST_F(VlodCity, DiskOrderMovesTheLevelsNotTheirBytes) {
     auto r = test::run_cellwalk("pvs " + world_ + " --engine vlod --cells grid:30 --refine 1 --lod-height 72 --json --disk-order " +
                                 layout + " -o " + file);
     ASSERT_EQ(r.exit_code, 0) << r.output;
-    const nlohmann::json j = summary_of(r);
+    const nlohmann::json j = test::json_output(r);
     ASSERT_TRUE(j.contains("vlod")) << r.output;
     ASSERT_EQ(test::run_cellwalk("verify " + file).exit_code, 0) << layout;
     const World world(file);

@@ -231,7 +231,10 @@ TEST(WalkCommand, SeveralStrategiesSideBySide) {
   r = test::run_cellwalk("walk " + world + " --path " + dir.file("p.txt") +
                          " --strategy brute --strategy ground-truth --width 96 --height 64 --json -o " + dir.file("out"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  auto all = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  const auto walked = test::json_output(r);
+  EXPECT_EQ(walked["schema"], 1);
+  EXPECT_EQ(walked["command"], "walk");
+  auto all = walked["runs"];
   ASSERT_EQ(all.size(), 2u);
   EXPECT_EQ(all[0]["strategy"], "brute");
   EXPECT_EQ(all[1]["strategy"], "ground-truth");
@@ -249,7 +252,7 @@ TEST(WalkCommand, SeveralStrategiesSideBySide) {
   r = test::run_cellwalk("compare " + world + " --path " + dir.file("p.txt") +
                          " --strategy brute --strategy conv --every 5 --width 96 --height 64 --json -o " + dir.file("cmp"));
   ASSERT_EQ(r.exit_code, 0) << r.output;
-  auto fidelities = nlohmann::json::parse(r.output.substr(r.output.find('[')));
+  auto fidelities = test::json_output(r)["runs"];
   ASSERT_EQ(fidelities.size(), 2u);
   EXPECT_EQ(fidelities[1]["strategy"], "conv");
   for (const auto& run : fidelities) {

@@ -8,6 +8,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/store/store_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -62,7 +63,7 @@ void register_store(CLI::App& bench) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_store_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench store", summary);
       return;
     }
     for (const auto& sentence : summary["reading"])

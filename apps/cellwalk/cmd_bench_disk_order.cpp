@@ -7,6 +7,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/disk_order/disk_order_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -28,7 +29,7 @@ void register_bench_disk_order(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_disk_order_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench disk-order", summary);
       return;
     }
     for (const auto& r : summary["runs"])

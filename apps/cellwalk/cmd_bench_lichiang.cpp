@@ -8,6 +8,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/lichiang/lichiang_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -47,7 +48,7 @@ void register_bench_lichiang(CLI::App& bench, std::string (*command_line)()) {
     if (args->no_plot) args->params.plot_fractions.clear();
     const nlohmann::ordered_json summary = run_lichiang_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench lichiang", summary);
       return;
     }
     std::printf("hybrid + relevance beat LRU + one-step on stalls and hit ratio on %d of %d paths\nwrote %s/lichiang.md\n",

@@ -9,6 +9,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/pvs_stream/pvs_stream_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -56,7 +57,7 @@ void register_bench_pvs_stream(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_pvs_stream_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench pvs-stream", summary);
       return;
     }
     std::printf("%u view cells, %u objects: a cell sees %.2f %%, neighbours share %.1f %%\n",

@@ -7,6 +7,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/review/review_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -43,7 +44,7 @@ void register_bench_review(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_review_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench review", summary);
       return;
     }
     for (const auto& r : summary["table41"])

@@ -7,6 +7,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/scene_tree/scene_tree_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -46,7 +47,7 @@ void register_bench_scene_tree(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_scene_tree_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench scene-tree", summary);
       return;
     }
     for (const auto& sentence : summary["reading"]) std::printf("%s\n", sentence.get<std::string>().c_str());

@@ -9,6 +9,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/stratified/stratified_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -44,7 +45,7 @@ void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_stratified_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench stratified", summary);
       return;
     }
     for (const auto& [seed, walks] : summary["paths"].items())

@@ -8,6 +8,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/vdr/vdr_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -45,7 +46,7 @@ void register_bench_vdr(CLI::App& bench, std::string (*command_line)()) {
     args->params.render = !args->no_render;
     const nlohmann::ordered_json summary = run_vdr_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench vdr", summary);
       return;
     }
     std::printf("%d models in %.1f min\nwrote %s/vdr.md\n", summary["models"].get<int>(), summary["minutes"].get<double>(),

@@ -8,6 +8,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/visibility/visibility_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -40,7 +41,7 @@ void register_bench_visibility(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_visibility_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench visibility", summary);
       return;
     }
     for (const auto& sentence : summary["reading"]) std::printf("%s\n", sentence.get<std::string>().c_str());

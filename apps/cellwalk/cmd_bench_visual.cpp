@@ -7,6 +7,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/visual/visual_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -47,7 +48,7 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)()) {
     args->params.dov_cubes = parse_dov_cubes(args->dov_cubes);
     const nlohmann::ordered_json summary = run_visual_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench visual", summary);
       return;
     }
     for (const auto& [label, w] : summary["walk"].items())

@@ -8,6 +8,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "experiments/vlod/vlod_report.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -44,7 +45,7 @@ void register_bench_vlod(CLI::App& bench, std::string (*command_line)()) {
     args->params.command_line = command_line();
     const nlohmann::ordered_json summary = run_vlod_bench(args->params);
     if (args->json) {
-      std::printf("%s\n", summary.dump(2).c_str());
+      print_json("bench vlod", summary);
       return;
     }
     for (const auto& s : summary["scale"])

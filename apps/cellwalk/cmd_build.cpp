@@ -9,6 +9,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -48,13 +49,13 @@ void register_build(CLI::App& root) {
                                 });
     progress.reset();
     if (args->json) {
-      nlohmann::ordered_json j = {{"world", args->out}, {"objects", r.objects}, {"triangles", r.triangles},
+      nlohmann::ordered_json j = {{"input", args->scene}, {"output", args->out}, {"objects", r.objects}, {"triangles", r.triangles},
                                   {"levels", r.levels}, {"stored_triangles", r.stored_triangles},
                                   {"raw_bytes", r.raw_bytes}, {"level0_bytes", r.level0_bytes},
                                   {"geometry_bytes", r.geometry_bytes}, {"file_bytes", r.file_bytes},
                                   {"seconds", r.seconds}, {"triangles_per_second", r.triangles / std::max(r.seconds, 1e-9)},
                                   {"peak_rss_bytes", r.peak_rss_bytes}};
-      std::printf("%s\n", j.dump(2).c_str());
+      print_json("build", j);
       return;
     }
     std::printf("build: %llu objects, %llu triangles (%llu levels, %llu triangles in all levels)\n"

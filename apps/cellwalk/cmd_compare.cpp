@@ -13,6 +13,7 @@
 #include "core/progress.hpp"
 #include "experiments/common/bench_support.hpp"
 #include "replay_options.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -116,7 +117,7 @@ void register_compare(CLI::App& root) {
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const auto& run : runs) all.push_back(labelled_json(run.strategy, run.summary));
-      std::printf("%s\n", (runs.size() == 1 ? all.front() : all).dump(2).c_str());
+      print_json("compare", {{"input", args->world}, {"path", args->path}, {"output", args->out}, {"runs", all}});
     }
     const std::string table = comparison_table(runs);
     write_file_atomically(args->out + "/compare.md", table);

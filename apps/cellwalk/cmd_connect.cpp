@@ -11,6 +11,7 @@
 #include "cellwalk/systems/vdr/vdr_walk.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -76,7 +77,7 @@ void run_connect(ConnectArgs& a) {
     if (r.frames[i].accuracy >= 0) samples.push_back({i, r.frames[i].accuracy});
   j["accuracy_by_frame"] = samples;
   if (a.json) {
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json("connect", j);
     return;
   }
   if (a.prime)

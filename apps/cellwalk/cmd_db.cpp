@@ -10,6 +10,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -39,14 +40,14 @@ void register_db(CLI::App& root) {
     const ObjectDatabase reopened(world, out);  // checked as a walk will open it
     (void)reopened;
     if (a->json) {
-      const nlohmann::ordered_json j = {{"file", out},
-                                        {"world", a->world},
+      const nlohmann::ordered_json j = {{"input", a->world},
+                                        {"output", out},
                                         {"objects", built.objects},
                                         {"rows", built.rows},
                                         {"blob_bytes", built.blob_bytes},
                                         {"file_bytes", built.file_bytes},
                                         {"seconds", built.seconds}};
-      std::printf("%s\n", j.dump(2).c_str());
+      print_json("db", j);
       return;
     }
     std::printf(

@@ -15,6 +15,7 @@
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -75,7 +76,7 @@ void write_world(const std::string& what, const Output& out, const std::vector<s
         {"generator", what},        {"output", out.scene},    {"objects", c.objects},
         {"triangles", c.triangles}, {"vertices", c.vertices}, {"bytes", c.bytes},
         {"nav_nodes", nav_nodes},   {"nav_edges", nav_edges}, {"seconds", seconds}};
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json("generate", j);
     return;
   }
   std::printf("%s: %llu objects, %llu triangles, %llu bytes (raw), written to %s in %.2f s\n",

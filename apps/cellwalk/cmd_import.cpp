@@ -17,6 +17,7 @@
 #include "cellwalk/scene/scene_file.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -139,11 +140,11 @@ void run_import(const ImportOptions& opt) {
   if (gltf) gltf->finish();
 
   if (opt.json) {
-    nlohmann::json j = {{"output", opt.output},      {"objects", counts.objects},
+    nlohmann::ordered_json j = {{"inputs", opt.inputs}, {"output", opt.output}, {"objects", counts.objects},
                         {"triangles", counts.triangles}, {"vertices", counts.vertices},
                         {"bytes", counts.bytes},     {"skipped_without_triangles", skipped},
                         {"split_into_patches", split}};
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json("import", j);
   } else {
     std::printf("imported %llu objects, %llu triangles, %llu bytes", static_cast<unsigned long long>(counts.objects),
                 static_cast<unsigned long long>(counts.triangles), static_cast<unsigned long long>(counts.bytes));

@@ -7,6 +7,7 @@
 #include "cellwalk/scene/scene_file.hpp"
 #include "cellwalk/store/world.hpp"
 #include "commands.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -16,7 +17,7 @@ nlohmann::ordered_json scene_json(const std::string& file) {
   const SceneInfo& info = scene.info();
   uint64_t record_bytes = 0;
   for (ObjectId id = 0; id < scene.object_count(); ++id) record_bytes += scene.entry(id).size;
-  return {{"file", file},
+  return {{"input", file},
           {"kind", "scene"},
           {"generator", info.generator},
           {"seed", info.seed},
@@ -51,7 +52,7 @@ nlohmann::ordered_json world_json(const std::string& file) {
     rtree = {{"height", tree.height()}, {"nodes", tree.node_count()}, {"max_entries", tree.max_entries()},
              {"min_entries", tree.min_entries()}, {"method", tree.method() == RTreeMethod::kStr ? "str" : "linear-insert"}};
   }
-  return {{"file", file},
+  return {{"input", file},
           {"kind", "world"},
           {"page_size", world.file().page_size()},
           {"pages", world.file().page_count()},
@@ -72,9 +73,9 @@ nlohmann::ordered_json world_json(const std::string& file) {
 }
 
 void print_text(const nlohmann::ordered_json& j) {
-  std::printf("%s %s\n", j["kind"].get<std::string>().c_str(), j["file"].get<std::string>().c_str());
+  std::printf("%s %s\n", j["kind"].get<std::string>().c_str(), j["input"].get<std::string>().c_str());
   for (const auto& [key, value] : j.items()) {
-    if (key == "kind" || key == "file" || key == "sections" || key == "build_params") continue;
+    if (key == "schema" || key == "command" || key == "kind" || key == "input" || key == "sections" || key == "build_params") continue;
     std::printf("  %-20s %s\n", key.c_str(), value.dump().c_str());
   }
   if (j.contains("sections"))
@@ -93,7 +94,7 @@ void register_info(CLI::App& root) {
   cmd->add_flag("--json", *json, "Machine-readable output");
   cmd->callback([file, json] {
     const auto j = is_world_file(*file) ? world_json(*file) : scene_json(*file);
-    if (*json) std::printf("%s\n", j.dump(2).c_str());
+    if (*json) print_json("info", j);
     else print_text(j);
   });
 }

@@ -18,6 +18,7 @@
 #include "cellwalk/systems/vdr/vdr_paths.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -30,7 +31,7 @@ PlannedSpace plan_or_fly(const World& world, PlannerOptions options, bool may_fl
     return plan_free_space(world, options);
   } catch (const Error& e) {
     if (std::string(e.what()).find("no free space to walk") == std::string::npos) throw;
-    std::printf("path: no floor to walk on; flying through the free space instead (--planner --fly)\n");
+    std::fprintf(stderr, "path: no floor to walk on; flying through the free space instead (--planner --fly)\n");
     options.fly = true;
     return plan_free_space(world, options);
   }
@@ -83,6 +84,7 @@ struct PathArgs {
   PlannerOptions planning;
   std::string around, look_at;
   bool coverage = false;
+  bool json = false;
 };
 
 // The path of the kind asked for, before --look-at.
@@ -101,7 +103,7 @@ CameraPath make_path(PathArgs& args, const SceneInfo& info) {
   if (world_file) world.emplace(args.scene);
   bool plan = args.planner;
   if (!plan && world && !nav_lies_in_world(*world)) {
-    std::printf("path: the world's navigation graph does not lie in it; planning its free space (--planner)\n");
+    std::fprintf(stderr, "path: the world's navigation graph does not lie in it; planning its free space (--planner)\n");
     plan = true;
   }
   if (plan && !world_file)
@@ -109,7 +111,7 @@ CameraPath make_path(PathArgs& args, const SceneInfo& info) {
   if (!plan) return generate_path(info.nav, args.params);
   const PlannedSpace space = plan_or_fly(*world, args.planning, !args.planner);
   const PlannerOptions& o = space.options;
-  std::printf("path: planned %zu nodes, %zu edges of free space (of %llu grid points, %llu free) in %.2f s "
+  std::fprintf(stderr, "path: planned %zu nodes, %zu edges of free space (of %llu grid points, %llu free) in %.2f s "
               "(+%.2f s loading); eye height %.3g, clearance %.3g, spacing %.3g, reach %.3g%s\n",
               space.nav.nodes.size(), space.nav.edges.size(), static_cast<unsigned long long>(space.candidates),
               static_cast<unsigned long long>(space.free), space.plan_seconds, space.load_seconds, o.eye_height,
@@ -118,14 +120,17 @@ CameraPath make_path(PathArgs& args, const SceneInfo& info) {
 }
 
 // "in view": the world covers at least 1 % of the image (a 64-ray-wide grid).
-void report_coverage(const World& world, const CameraPath& path) {
+nlohmann::ordered_json report_coverage(const World& world, const CameraPath& path, bool json) {
   const std::vector<float> coverage = view_coverage(world, path, Camera{});
   std::vector<float> sorted = coverage;
   std::sort(sorted.begin(), sorted.end());
   const size_t in_view = size_t(std::count_if(coverage.begin(), coverage.end(), [](float c) { return c >= 0.01f; }));
+  const nlohmann::ordered_json j = {{"frames_in_view", in_view}, {"median_share", sorted[sorted.size() / 2]}, {"least_share", sorted.front()}};
+  if (json) return j;
   std::printf("path: the world is in view (>= 1 %% of the image) on %zu of %zu frames (%.1f %%); it covers %.1f %% of "
               "the image at the median frame, %.1f %% at the least\n",
               in_view, coverage.size(), 100.0 * in_view / coverage.size(), 100.0 * sorted[sorted.size() / 2], 100.0 * sorted.front());
+  return j;
 }
 
 void register_path(CLI::App& root) {
@@ -161,6 +166,7 @@ void register_path(CLI::App& root) {
       ->check(number_in(0, 1e7, true))->needs(planner);
   cmd->add_flag("--fly", args->planning.fly, "Planner: fly through the volume (a 3-D grid) instead of walking on floors")
       ->needs(planner);
+  cmd->add_flag("--json", args->json, "Print what was written as JSON (the planner's notes go to standard error, as always)");
   cmd->add_flag("--coverage", args->coverage,
                 "Also report how much of each frame shows the world (rays against its triangles, 60° lens, 4:3; "
                 "needs a world file)");
@@ -175,9 +181,14 @@ void register_path(CLI::App& root) {
       for (PathFrame& f : path.frames) aim_at(f, *look_at);
     path.world = path_world(info);
     write_path(path, args->out);
-    std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(),
-                path.frames.back().time, args->out.c_str());
-    if (args->coverage) report_coverage(World(args->scene), path);
+    if (!args->json)
+      std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(),
+                  path.frames.back().time, args->out.c_str());
+    const nlohmann::ordered_json coverage =
+        args->coverage ? report_coverage(World(args->scene), path, args->json) : nlohmann::ordered_json();
+    if (args->json)
+      print_json("path", {{"input", args->scene}, {"output", args->out}, {"kind", args->kind}, {"frames", path.frames.size()},
+                          {"seconds", path.frames.back().time}, {"coverage", coverage}});
   });
 }
 

@@ -21,6 +21,7 @@
 #include "precompute/embree_scene.hpp"
 #include "precompute/ray_cube_map.hpp"
 #include "precompute/pvs_builder.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -42,12 +43,6 @@ struct Args {
   std::optional<uint64_t> show;  // --show CELL
   std::vector<double> at;        // --at X,Y,Z
 };
-
-// --json output. Object names and paths are the user's bytes: any that are not UTF-8 are shown
-// as U+FFFD, not refused.
-void print_json(const nlohmann::ordered_json& j) {
-  std::printf("%s\n", j.dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace).c_str());
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
@@ -142,9 +137,9 @@ void run_check(const Args& a, const World& world, const VisibilityEngine& engine
                                 {"truth_cubes", a.truth_cubes},
                                 {"recall", recall}, {"min_recall", min_recall}, {"tightness", tightness},
                                 {"cells_failing", failing}, {"engine_seconds_per_cell", engine_s / n},
-                                {"truth_seconds_per_cell", truth_s / n}, {"cells", cells}};
+                                {"truth_seconds_per_cell", truth_s / n}, {"checked_cells", cells}};
     if (const auto surface = surface_json(engine); !surface.is_null()) j["surface_occluders"] = surface;
-    print_json(j);
+    print_json("pvs", j);
   } else {
     print_surface(engine);
     std::printf("check %s: %zu cells, recall %.4f (min %.4f, %llu cells below 1), tightness %.3f, %.3f s per cell\n",
@@ -177,7 +172,7 @@ void run_dov_compare(const Args& a, const World& world, const ViewCellPartition&
                                 {"engine_speedup", engine_speedup}, {"max_dov_difference", c.max_difference},
                                 {"largest_pixel_weight", c.largest_pixel_weight}, {"pairs", c.pairs},
                                 {"one_sided", c.one_sided}, {"one_sided_max_dov", c.one_sided_max_dov}};
-    print_json(j);
+    print_json("pvs", j);
     return;
   }
   std::printf("dov cube maps at %d² on %llu %s cells, exact vs %s interleaved:\n"
@@ -313,7 +308,7 @@ void run_show(const Args& a, const World& world) {
                                       {"engine", pvs.engine()},
                                       {"conservative", pvs.conservative()},
                                       {"objects", objects}};
-    print_json(j);
+    print_json("pvs", j);
     return;
   }
   std::printf("cell %u of %zu (%s, depth %u): box (%.3f, %.3f, %.3f) to (%.3f, %.3f, %.3f), %s\n", id,
@@ -341,10 +336,10 @@ void run_merge(const Args& a, const World& world) {
   std::optional<visibility::VlodSizes> vlod;
   const visibility::PvsSizes sizes = write_sets(a, world, out, *merged.partition, merged.sets, merged.run, vlod);
   if (a.json) {
-    nlohmann::ordered_json j = {{"world", out}, {"parts", a.merge.size()}};
+    nlohmann::ordered_json j = {{"output", out}, {"parts", a.merge.size()}};
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else j["sizes"] = sizes_json(sizes);
-    print_json(j);
+    print_json("pvs", j);
     return;
   }
   std::printf("pvs: merged %zu parts into %s\n", a.merge.size(), out.c_str());
@@ -413,7 +408,7 @@ void run_compute(const Args& a, const World& world) {
     if (vlod) j["vlod"] = vlod_json(*vlod);
     else if (!sharded) j["sizes"] = sizes_json(sizes);
     if (const auto surface = surface_json(*engine); !surface.is_null()) j["surface_occluders"] = surface;
-    print_json(j);
+    print_json("pvs", j);
     return;
   }
   std::printf("pvs %s: %zu %s cells (%llu solid, %llu skipped off the --along path); computed %llu (%llu resumed) in %.1f s, "

@@ -8,6 +8,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "lens_options.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -17,6 +18,7 @@ void register_render(CLI::App& root) {
     std::string world, path, out, strategy = "brute";
     int frame = 0;
     LensOptions lens;
+    bool json = false;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("world", args->world, "World file (.cww) from cellwalk build")->required();
@@ -25,6 +27,7 @@ void register_render(CLI::App& root) {
   cmd->add_option("--frame", args->frame, "Frame of the path to render")->capture_default_str()->check(integer_in(0, 10000000));
   cmd->add_option("--strategy", args->strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
   args->lens.add_to(*cmd);
+  cmd->add_flag("--json", args->json, "Print what was drawn as JSON");
   cmd->callback([args] {
     args->lens.check();
     refuse_same_files({args->world, args->path}, {args->out});
@@ -56,8 +59,12 @@ void register_render(CLI::App& root) {
     Renderer renderer(settings);
     FrameStats stats = render_frame(*strategy, renderer, camera);
     write_png(renderer.read_color(), args->out);
-    std::printf("render: %llu objects, %llu triangles in %.1f ms, wrote %s\n", (unsigned long long)stats.objects,
-                (unsigned long long)stats.triangles, stats.frame_ms, args->out.c_str());
+    if (args->json)
+      print_json("render", {{"input", args->world}, {"output", args->out}, {"strategy", strategy->name()},
+                            {"objects", stats.objects}, {"triangles", stats.triangles}, {"frame_ms", stats.frame_ms}});
+    else
+      std::printf("render: %llu objects, %llu triangles in %.1f ms, wrote %s\n", (unsigned long long)stats.objects,
+                  (unsigned long long)stats.triangles, stats.frame_ms, args->out.c_str());
   });
 }
 

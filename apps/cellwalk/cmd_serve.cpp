@@ -16,6 +16,7 @@
 #include "cellwalk/systems/vdr/vdr_server.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -80,7 +81,7 @@ void serve_vdr(const ServeArgs& a) {
                                       {"traversal_ms", s.traversal_ms},
                                       {"peak_session_bytes", s.peak_session_bytes},
                                       {"model_bytes", s.model_bytes}};
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json("serve", j);
     return;
   }
   std::printf("served %llu sessions (%llu dropped, %llu refused), %llu batches, %llu ops, %llu bytes\n", (unsigned long long)s.sessions_opened,
@@ -126,7 +127,7 @@ void register_serve(CLI::App& root) {
       const nlohmann::ordered_json j = {{"port", server.port()},           {"sessions", s.sessions_opened},
                                         {"dropped", s.sessions_dropped},   {"fetches", s.fetches},
                                         {"objects_sent", s.objects_sent},  {"bytes_sent", s.bytes_sent}};
-      std::printf("%s\n", j.dump(2).c_str());
+      print_json("serve", j);
       return;
     }
     std::printf("served %llu sessions (%llu dropped), %llu fetches, %llu objects, %llu bytes\n",

@@ -19,6 +19,7 @@
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "precompute/pvs_builder.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -178,7 +179,7 @@ void register_stratify_plan(CLI::App& stratify) {
   cmd->add_flag("--json", o->json, "Machine-readable output");
   cmd->callback([o] {
     const Json j = plan_json(*o);
-    if (o->json) std::printf("%s\n", j.dump(2).c_str());
+    if (o->json) print_json("stratify plan", j);
     else print_plan(j);
   });
 }
@@ -239,7 +240,7 @@ void run_build(const BuildOptions& o) {
                     {"near_bytes", sizes.near_bytes}, {"faces", sizes.faces}, {"raw_face_bytes", sizes.raw_face_bytes},
                     {"color_bytes", sizes.color_bytes}, {"id_bytes", sizes.id_bytes}, {"depth_bytes", sizes.depth_bytes},
                     {"cells_seconds", cells_s}, {"bake_seconds", sizes.bake_seconds}, {"bake_ms_per_cell", per_cell_ms}};
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json("stratify build", j);
     return;
   }
   std::printf("stratify build: α = %g°, v = %.2f m (%s), b = %g m: %llu cells (k-d height %u), %llu baked, %llu faces\n",

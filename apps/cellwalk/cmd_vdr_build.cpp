@@ -15,6 +15,7 @@
 #include "commands.hpp"
 #include "core/progress.hpp"
 #include "core/stopwatch.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -58,7 +59,7 @@ void run_vdr_build(const VdrBuildArgs& a) {
   const double dag_s = clock.lap_ms() / 1000;
   vdr::write_vdr_file(out, pm, dag);
   const uint64_t file_bytes = std::filesystem::file_size(out);
-  nlohmann::ordered_json j = {{"file", out},
+  nlohmann::ordered_json j = {{"output", out},
                               {"input_triangles", input.triangle_count()},
                               {"vertices", pm.vertex_count()},
                               {"base_vertices", pm.base_vertex_count},
@@ -72,7 +73,7 @@ void run_vdr_build(const VdrBuildArgs& a) {
                               {"dag_seconds", dag_s},
                               {"peak_rss_bytes", peak_rss_bytes()}};
   if (a.json) {
-    std::printf("%s\n", j.dump(2).c_str());
+    print_json("vdr-build", j);
     return;
   }
   std::printf("%s: %u vertices, base %u vertices / %u triangles, %u vsplits\n", out.c_str(), pm.vertex_count(),

@@ -9,6 +9,7 @@
 #include "checks.hpp"
 #include "commands.hpp"
 #include "core/progress.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -37,14 +38,14 @@ void register_visual_build(CLI::App& root) {
     });
     if (progress) progress->finish();
     const HdovTree tree(world, out);
-    nlohmann::ordered_json j = {{"file", out}, {"nodes", tree.node_count()}, {"cells", tree.cell_count()},
+    nlohmann::ordered_json j = {{"input", a->world}, {"output", out}, {"nodes", tree.node_count()}, {"cells", tree.cell_count()},
                                 {"height", tree.height()}, {"fanout", tree.max_entries()},
                                 {"visible_nodes", built.visible_nodes()}};
     for (VPageScheme s : {VPageScheme::kHorizontal, VPageScheme::kVertical, VPageScheme::kIndexedVertical})
       j["storage"][vpage_scheme_name(s)] = tree.storage(s).total();
     j["storage"]["naive"] = tree.naive_bytes();
     if (a->json) {
-      std::printf("%s\n", j.dump(2).c_str());
+      print_json("visual-build", j);
       return;
     }
     std::printf("%s: %u nodes, height %u, M %u, %u cells, %llu visible (node, cell) pairs\n", out.c_str(), tree.node_count(),

@@ -15,6 +15,7 @@
 #include "core/progress.hpp"
 #include "experiments/common/bench_support.hpp"
 #include "replay_options.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 namespace {
@@ -106,7 +107,7 @@ void register_walk(CLI::App& root) {
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const WalkSummary& s : runs) all.push_back(nlohmann::ordered_json::parse(to_json(s)));
-      std::printf("%s\n", (runs.size() == 1 ? all.front() : all).dump(2).c_str());
+      print_json("walk", {{"input", args->world}, {"path", args->path}, {"output", args->out}, {"runs", all}});
     }
     const std::string table = comparison_table(runs);
     write_file_atomically(args->out + "/walk.md", table);

@@ -163,7 +163,10 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
     if (file_size < kHeaderBytes + kTrailerBytes)
       fail(path_, "too short to be a scene file (" + std::to_string(file_size) + " bytes)");
     auto header = pread_exact(fd_, path_, 0, kHeaderBytes);
-    if (std::memcmp(header.data(), kMagic, 8) != 0) fail(path_ + "@0", "not a cellwalk scene file (bad magic)");
+    if (std::memcmp(header.data(), "CWWORLD", 7) == 0)
+      fail(path_, "is a world file (.cww), not a scene file: give the scene it was built from, or use the world where a command takes one");
+    if (std::memcmp(header.data(), kMagic, 8) != 0)
+      fail(path_ + "@0", "not a cellwalk scene file (bad magic); give a scene file made by cellwalk generate or import");
     uint32_t version;
     std::memcpy(&version, header.data() + 8, 4);
     if (version != kVersion)

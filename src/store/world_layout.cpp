@@ -34,7 +34,10 @@ std::vector<uint8_t> encode_header(const Header& h) {
 Header decode_header(std::span<const uint8_t> bytes, const std::string& path, uint64_t file_size) {
   ByteReader r(bytes, path, 0);
   if (bytes.size() < kHeaderBytes) r.error("too short to be a world file (" + std::to_string(file_size) + " bytes)");
-  if (std::memcmp(bytes.data(), kMagic, 8) != 0) r.error("not a cellwalk world file (bad magic)");
+  if (std::memcmp(bytes.data(), "CWSCENE", 7) == 0)
+    r.error("is a scene file, not a world file: build it first (cellwalk build " + path + " -o WORLD.cww) and give the .cww");
+  if (std::memcmp(bytes.data(), kMagic, 8) != 0)
+    r.error("not a cellwalk world file (bad magic); give a world file made by cellwalk build");
   r.get<std::array<char, 8>>("magic");
   Header h;
   h.version = r.get<uint32_t>("version");
