@@ -91,11 +91,10 @@ void check_json_depth_of(Bytes b, bool glb, const std::string& name) {
 // The extensions this reader decodes; a file that requires any other fails naming it, before
 // tinygltf would report a symptom ("Invalid byteLength", "invalid bufferView").
 constexpr std::string_view kReadableExtensions[] = {"KHR_mesh_quantization", "KHR_materials_unlit",
-                                                    "KHR_texture_transform"};
+                                                    "KHR_texture_transform", "EXT_meshopt_compression",
+                                                    "KHR_meshopt_compression"};
 
 std::string what_to_do_for(std::string_view extension) {
-  if (extension == "EXT_meshopt_compression" || extension == "KHR_meshopt_compression")
-    return "; write it without compression (gltfpack without -c/-cc) and import that";
   if (extension == "KHR_draco_mesh_compression")
     return "; decompress it first (e.g. gltf-transform's 'copy' or Blender's glTF export without Draco)";
   return "; re-export the model without it";
@@ -162,10 +161,16 @@ std::string first_line(std::string s) {
 }
 
 tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& base_dir) {
-  const bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
+  bool glb = bytes.size() >= 4 && std::memcmp(bytes.data(), "glTF", 4) == 0;
   if (glb) check_glb_framing(bytes, name);
   if (bytes.size() > UINT32_MAX) fail(name, "file larger than 4 GiB");
   check_json_depth_of(bytes, glb, name);
+  // Compressed views are decoded first; the rest reads the equivalent uncompressed GLB.
+  const std::vector<uint8_t> decoded = decode_meshopt_compression(bytes, glb, name, base_dir);
+  if (!decoded.empty()) {
+    bytes = decoded;
+    glb = true;
+  }
   check_required_extensions(bytes, glb, name);
   FileAccess access{base_dir.empty() ? std::filesystem::path()
                                      : std::filesystem::path(base_dir).lexically_normal()};

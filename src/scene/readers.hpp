@@ -30,6 +30,12 @@ std::vector<Object> read_obj(Bytes bytes, const std::string& name, const std::st
 std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
                               const std::string& base_dir);
 
+// A glTF (JSON, or GLB when `glb`) whose buffer views use EXT_meshopt_compression (or
+// KHR_meshopt_compression) as an equivalent GLB with those views decoded into one binary
+// chunk and the extension removed; empty when no view is compressed (gltf_meshopt.cpp).
+// REQUIRES: a GLB's framing was checked.
+std::vector<uint8_t> decode_meshopt_compression(Bytes file, bool glb, const std::string& name, const std::string& base_dir);
+
 // The bytes of a file; an Error names it when it is a directory, empty, unreadable or larger
 // than kMaxModelBytes.
 constexpr uint64_t kMaxModelBytes = uint64_t(2) << 30;
