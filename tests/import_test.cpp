@@ -362,6 +362,23 @@ TEST(ImportErrors, TextErrorsNameTheLine) {
 
 // A GLB of one triangle: positions, normals and indices in one binary chunk, accessors 0, 1
 // and 2; `index_type` is the index accessor's component type, `node` the one node.
+// A GLB of a JSON document and its binary chunk (both padded to 4 bytes).
+std::vector<uint8_t> glb_of(const nlohmann::json& doc, std::string bin) {
+  std::string json = doc.dump();
+  json.append((4 - json.size() % 4) % 4, ' ');
+  bin.append((4 - bin.size() % 4) % 4, '\0');
+  std::string glb(12, '\0');
+  const auto chunk = [&glb](const std::string& data, uint32_t type) {
+    const uint32_t length = uint32_t(data.size());
+    glb.append(reinterpret_cast<const char*>(&length), 4).append(reinterpret_cast<const char*>(&type), 4).append(data);
+  };
+  chunk(json, 0x4E4F534Au);
+  chunk(bin, 0x004E4942u);
+  const uint32_t header[3] = {0x46546C67u, 2, uint32_t(glb.size())};
+  std::memcpy(glb.data(), header, 12);
+  return bytes_of(glb);
+}
+
 // `patch` is merged into the document last (RFC 7386: an array given replaces the whole array).
 std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index_type,
                                   const nlohmann::json& node = {{"mesh", 0}},
@@ -392,18 +409,7 @@ std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index
         {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
         {{"bufferView", 2}, {"componentType", index_type}, {"count", 3}, {"type", "SCALAR"}}}}};
   doc.merge_patch(patch);
-  std::string json = doc.dump();
-  json.append((4 - json.size() % 4) % 4, ' ');
-  std::string glb(12, '\0');
-  const auto chunk = [&glb](const std::string& data, uint32_t type) {
-    const uint32_t length = uint32_t(data.size());
-    glb.append(reinterpret_cast<const char*>(&length), 4).append(reinterpret_cast<const char*>(&type), 4).append(data);
-  };
-  chunk(json, 0x4E4F534Au);
-  chunk(bin, 0x004E4942u);
-  const uint32_t header[3] = {0x46546C67u, 2, uint32_t(glb.size())};
-  std::memcpy(glb.data(), header, 12);
-  return bytes_of(glb);
+  return glb_of(doc, bin);
 }
 
 std::string gltf_error(const std::vector<uint8_t>& glb) {
@@ -646,18 +652,7 @@ std::vector<uint8_t> meshopt_glb(const Mesh& mesh, const char* extension) {
        {{{"bufferView", 0}, {"componentType", 5126}, {"count", n}, {"type", "VEC3"}},
         {{"bufferView", 1}, {"componentType", 5120}, {"normalized", true}, {"count", n}, {"type", "VEC3"}},
         {{"bufferView", 2}, {"componentType", 5125}, {"count", mesh.indices.size()}, {"type", "SCALAR"}}}}};
-  std::string json = doc.dump();
-  json.append((4 - json.size() % 4) % 4, ' ');
-  std::string glb(12, '\0');
-  const auto chunk = [&glb](const std::string& data, uint32_t type) {
-    const uint32_t length = uint32_t(data.size());
-    glb.append(reinterpret_cast<const char*>(&length), 4).append(reinterpret_cast<const char*>(&type), 4).append(data);
-  };
-  chunk(json, 0x4E4F534Au);
-  chunk(bin, 0x004E4942u);
-  const uint32_t header[3] = {0x46546C67u, 2, uint32_t(glb.size())};
-  std::memcpy(glb.data(), header, 12);
-  return bytes_of(glb);
+  return glb_of(doc, bin);
 }
 
 // Issue 16: gltfpack -cc output failed with "Invalid `byteLength'". Decoded with meshoptimizer,
