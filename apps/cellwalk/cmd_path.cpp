@@ -6,7 +6,6 @@
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
-#include <numbers>
 #include <optional>
 #include <string>
 
@@ -43,18 +42,19 @@ CameraPath thesis_camera_path(const SceneInfo& info, int which, double fps) {
   CameraPath out;
   const std::vector<vdr::VdrFrame> frames = vdr::thesis_path(which, info.bounds);
   for (size_t i = 0; i < frames.size(); ++i) {
-    const Vec3 d = glm::normalize(frames[i].aim - frames[i].eye);
-    out.frames.push_back({double(i) / fps, frames[i].eye, float(std::atan2(-d.x, -d.z) * 180 / std::numbers::pi),
-                          float(std::asin(std::clamp(d.y, -1.0f, 1.0f)) * 180 / std::numbers::pi)});
+    PathFrame f{double(i) / fps, frames[i].eye, 0.0f, 0.0f};
+    aim_at(f, frames[i].aim);
+    out.frames.push_back(f);
   }
   return out;
 }
 
 // The box of --around: an object of the world by id or name, or the whole world ("").
-Aabb inspection_target(const std::string& around, const std::string& file, const SceneInfo& info) {
+// `world` is null for a scene file.
+Aabb inspection_target(const std::string& around, const World* world_or_null, const SceneInfo& info) {
   if (around.empty()) return info.bounds;
-  if (!is_world_file(file)) fail("--around", "needs a world file (cellwalk build) to find objects in");
-  const World world(file);
+  if (!world_or_null) fail("--around", "needs a world file (cellwalk build) to find objects in");
+  const World& world = *world_or_null;
   const std::vector<std::string> names = world.object_names();
   for (size_t id = 0; id < names.size(); ++id)
     if (names[id] == around) return world.object(ObjectId(id)).bounds;
@@ -87,26 +87,23 @@ struct PathArgs {
   bool json = false;
 };
 
-// The path of the kind asked for, before --look-at.
-CameraPath make_path(PathArgs& args, const SceneInfo& info) {
+// The path of the kind asked for, before --look-at. `world` is null for a scene file.
+CameraPath make_path(PathArgs& args, const World* world, const SceneInfo& info) {
   if (args.kind == "inspect") {
     if (args.planner) fail("--planner", "plans street and free-space paths; inspect goes around the world or an object");
-    return inspection_path(inspection_target(args.around, args.scene, info), args.params);
+    return inspection_path(inspection_target(args.around, world, info), args.params);
   }
   if (args.kind == "scan" || args.kind == "orbit") {
     if (args.planner) fail("--planner", "plans street and free-space paths; scan and orbit go around the world's bounds");
     return thesis_camera_path(info, args.kind == "scan" ? 1 : 2, args.params.fps);
   }
   args.params.kind = parse_session_kind(args.kind);
-  const bool world_file = is_world_file(args.scene);
-  std::optional<World> world;
-  if (world_file) world.emplace(args.scene);
   bool plan = args.planner;
   if (!plan && world && !nav_lies_in_world(*world)) {
     std::fprintf(stderr, "path: the world's navigation graph does not lie in it; planning its free space (--planner)\n");
     plan = true;
   }
-  if (plan && !world_file)
+  if (plan && !world)
     fail(args.scene, "the planner needs the world's triangles; build the scene (cellwalk build) and plan on the world file");
   if (!plan) return generate_path(info.nav, args.params);
   const PlannedSpace space = plan_or_fly(*world, args.planning, !args.planner);
@@ -174,9 +171,12 @@ void register_path(CLI::App& root) {
     refuse_same_files({args->scene}, {args->out});
     if (!args->around.empty() && args->kind != "inspect") fail("--around", "goes with --kind inspect");
     if (args->coverage && !is_world_file(args->scene)) fail("--coverage", "needs a world file (cellwalk build)");
-    const SceneInfo info = is_world_file(args->scene) ? World(args->scene).info() : SceneReader(args->scene).info();
+    // Opened once: the planner, --around and --coverage read the same world.
+    std::optional<World> world;
+    if (is_world_file(args->scene)) world.emplace(args->scene);
+    const SceneInfo info = world ? world->info() : SceneReader(args->scene).info();
     const std::optional<Vec3> look_at = args->look_at.empty() ? std::nullopt : std::optional(look_at_point(args->look_at, info));
-    CameraPath path = make_path(*args, info);
+    CameraPath path = make_path(*args, world ? &*world : nullptr, info);
     if (look_at)
       for (PathFrame& f : path.frames) aim_at(f, *look_at);
     path.world = path_world(info);
@@ -185,7 +185,7 @@ void register_path(CLI::App& root) {
       std::printf("path: %zu frames (%s, %.1f s) written to %s\n", path.frames.size(), args->kind.c_str(),
                   path.frames.back().time, args->out.c_str());
     const nlohmann::ordered_json coverage =
-        args->coverage ? report_coverage(World(args->scene), path, args->json) : nlohmann::ordered_json();
+        args->coverage ? report_coverage(*world, path, args->json) : nlohmann::ordered_json();
     if (args->json)
       print_json("path", {{"input", args->scene}, {"output", args->out}, {"kind", args->kind}, {"frames", path.frames.size()},
                           {"seconds", path.frames.back().time}, {"coverage", coverage}});
