@@ -125,6 +125,17 @@ TEST_F(ViewerTest, ReplayEndsAtThePathsEndAndWritesItsScreenshot) {
   ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_EQ(read_path(dir_.file("out.path")).frames.size(), 7u);
   EXPECT_GT(distinct_colours(load_png(dir_.file("end.png"))), 10);
+  // --json says the same (docs/json.md); the viewer's notes go to standard error.
+  const auto j = view("--replay " + dir_.file("in.path") + " --record " + dir_.file("again.path") + " --strategy lod --json");
+  ASSERT_EQ(j.exit_code, 0) << j.output;
+  const nlohmann::json summary = test::json_output(j);
+  EXPECT_EQ(summary.value("command", ""), "view") << j.output;
+  EXPECT_EQ(summary.value("frames", 0), 7);
+  EXPECT_EQ(summary.value("recorded", ""), dir_.file("again.path"));
+  EXPECT_EQ(summary.value("recorded_frames", 0), 7);
+  EXPECT_GT(summary.value("mean_triangles", 0.0), 0.0);
+  EXPECT_GE(summary.value("worst_frame_ms", 0.0), summary.value("mean_frame_ms", 1.0));
+  EXPECT_EQ(summary.value("stopped_by_signal", true), false);
 }
 
 TEST_F(ViewerTest, ASignalEndsTheRunAndTheScreenshotIsStillWritten) {

@@ -4,6 +4,7 @@
 #include "cellwalk/runtime/viewer.hpp"
 #include "checks.hpp"
 #include "commands.hpp"
+#include "json_output.hpp"
 
 namespace cellwalk::app {
 
@@ -15,6 +16,7 @@ void register_view(CLI::App& root) {
     std::string scene;
     ViewerOptions options;
     double budget_mib = 0;
+    bool json = false;
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("world", args->scene, "World file (.cww)")->required();
@@ -30,11 +32,19 @@ void register_view(CLI::App& root) {
   cmd->add_option("--budget", args->budget_mib,
                   "Memory budget, MiB (0 = none): the strategy's store and the GPU cache, split as walk splits it")
       ->capture_default_str()->check(number_in(0, 1 << 24));
+  cmd->add_flag("--json", args->json, "Print what the run showed as JSON when it ends");
   cmd->callback([args] {
     args->options.budget_bytes = static_cast<uint64_t>(args->budget_mib * 1024 * 1024);
     refuse_same_files({args->scene, args->options.replay_file}, {args->options.record_file, args->options.screenshot_file});
     World world(args->scene);
-    run_viewer(world, args->options);
+    const ViewerSummary v = run_viewer(world, args->options);
+    if (args->json)
+      print_json("view", {{"input", args->scene}, {"strategy", args->options.strategy}, {"frames", v.frames},
+                          {"mean_frame_ms", v.mean_frame_ms}, {"worst_frame_ms", v.worst_frame_ms},
+                          {"mean_objects", v.mean_objects}, {"mean_triangles", v.mean_triangles},
+                          {"peak_resident_bytes", v.peak_resident_bytes}, {"screenshots", v.screenshots},
+                          {"recorded", v.recorded_file.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(v.recorded_file)},
+                          {"recorded_frames", v.recorded_frames}, {"stopped_by_signal", v.stopped_by_signal}});
   });
 }
 

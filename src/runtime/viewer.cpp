@@ -141,7 +141,8 @@ class StopOnSignals {
 
 }  // namespace
 
-void run_viewer(const World& scene, const ViewerOptions& options) {
+ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
+  ViewerSummary summary;
   Window window(options.width, options.height, "cellwalk — " + scene.file().path(), options.max_frames == 0);
   int fb_width, fb_height;
   window.framebuffer_size(fb_width, fb_height);
@@ -177,7 +178,9 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
   auto save_recording = [&] {
     if (s.recorded.frames.empty()) return;
     write_path(s.recorded, record_file);
-    std::printf("view: recorded %zu frames to %s\n", s.recorded.frames.size(), record_file.c_str());
+    summary.recorded_file = record_file;
+    summary.recorded_frames = s.recorded.frames.size();
+    std::fprintf(stderr, "view: recorded %zu frames to %s\n", s.recorded.frames.size(), record_file.c_str());
   };
   WindowCallbacks callbacks;
   callbacks.key = [&](int key, int action, int) {
@@ -250,6 +253,12 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
     } else {
       stats = render_frame(*strategy, *renderer, s.camera);
     }
+    ++summary.frames;
+    summary.mean_frame_ms += stats.frame_ms;
+    summary.worst_frame_ms = std::max(summary.worst_frame_ms, stats.frame_ms);
+    summary.mean_objects += double(stats.objects);
+    summary.mean_triangles += double(stats.triangles);
+    summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, stats.resident_bytes);
     fps = fps == 0 ? 1000.0 / std::max(stats.frame_ms, 0.01) : 0.9 * fps + 100.0 / std::max(stats.frame_ms, 0.01);
     renderer->draw_text(8, 8, overlay_text(s, stats, fps, strategy->name()), rgba8(255, 255, 255), 1.5f);
     int w, h;
@@ -258,13 +267,24 @@ void run_viewer(const World& scene, const ViewerOptions& options) {
     if (s.screenshot_requested) {
       const std::string file = unused_screenshot_name();
       write_png(renderer->read_color(), file);
-      std::printf("view: wrote %s\n", file.c_str());
+      std::fprintf(stderr, "view: wrote %s\n", file.c_str());
+      summary.screenshots.push_back(file);
       s.screenshot_requested = false;
     }
     window.swap_buffers();
   }
   if (s.recording) save_recording();
-  if (!options.screenshot_file.empty()) write_png(renderer->read_color(), options.screenshot_file);
+  if (!options.screenshot_file.empty()) {
+    write_png(renderer->read_color(), options.screenshot_file);
+    summary.screenshots.push_back(options.screenshot_file);
+  }
+  if (summary.frames > 0) {
+    summary.mean_frame_ms /= summary.frames;
+    summary.mean_objects /= summary.frames;
+    summary.mean_triangles /= summary.frames;
+  }
+  summary.stopped_by_signal = stop.requested();
+  return summary;
 }
 
 }  // namespace cellwalk

@@ -92,13 +92,7 @@ void check_json_depth_of(Bytes b, bool glb, const std::string& name) {
 // tinygltf would report a symptom ("Invalid byteLength", "invalid bufferView").
 constexpr std::string_view kReadableExtensions[] = {"KHR_mesh_quantization", "KHR_materials_unlit",
                                                     "KHR_texture_transform", "EXT_meshopt_compression",
-                                                    "KHR_meshopt_compression"};
-
-std::string what_to_do_for(std::string_view extension) {
-  if (extension == "KHR_draco_mesh_compression")
-    return "; decompress it first (e.g. gltf-transform's 'copy' or Blender's glTF export without Draco)";
-  return "; re-export the model without it";
-}
+                                                    "KHR_meshopt_compression", "KHR_draco_mesh_compression"};
 
 // Fails when the JSON lists a required extension this reader cannot decode. JSON that does
 // not parse is left for tinygltf to report.
@@ -112,7 +106,7 @@ void check_required_extensions(Bytes b, bool glb, const std::string& name) {
     if (!e.is_string()) continue;
     const std::string ext = e.get<std::string>();
     if (std::find(std::begin(kReadableExtensions), std::end(kReadableExtensions), ext) == std::end(kReadableExtensions))
-      fail(name, "requires the glTF extension " + ext + ", which cellwalk cannot read yet" + what_to_do_for(ext));
+      fail(name, "requires the glTF extension " + ext + ", which cellwalk cannot read yet; re-export the model without it");
   }
 }
 
@@ -165,11 +159,15 @@ tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& ba
   if (glb) check_glb_framing(bytes, name);
   if (bytes.size() > UINT32_MAX) fail(name, "file larger than 4 GiB");
   check_json_depth_of(bytes, glb, name);
-  // Compressed views are decoded first; the rest reads the equivalent uncompressed GLB.
-  const std::vector<uint8_t> decoded = decode_meshopt_compression(bytes, glb, name, base_dir);
-  if (!decoded.empty()) {
-    bytes = decoded;
-    glb = true;
+  // Compressed views, then compressed primitives (their streams may lie in compressed views),
+  // are decoded first; the rest reads the equivalent uncompressed GLB.
+  std::vector<uint8_t> decoded;
+  for (auto decode : {decode_meshopt_compression, decode_draco_compression}) {
+    if (std::vector<uint8_t> d = decode(bytes, glb, name, base_dir); !d.empty()) {
+      decoded = std::move(d);
+      bytes = decoded;
+      glb = true;
+    }
   }
   check_required_extensions(bytes, glb, name);
   FileAccess access{base_dir.empty() ? std::filesystem::path()

@@ -36,6 +36,10 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
 // REQUIRES: a GLB's framing was checked.
 std::vector<uint8_t> decode_meshopt_compression(Bytes file, bool glb, const std::string& name, const std::string& base_dir);
 
+// The same for primitives compressed with KHR_draco_mesh_compression: each decoded with
+// libdraco into float attributes and 32-bit indices (gltf_draco.cpp).
+std::vector<uint8_t> decode_draco_compression(Bytes file, bool glb, const std::string& name, const std::string& base_dir);
+
 // The bytes of a file; an Error names it when it is a directory, empty, unreadable or larger
 // than kMaxModelBytes.
 constexpr uint64_t kMaxModelBytes = uint64_t(2) << 30;

@@ -2,7 +2,9 @@
 // statistics on screen, toggle a bird's-eye view, and record the flown path.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "cellwalk/store/world.hpp"
 
@@ -29,6 +31,16 @@ struct ViewerOptions {
 // B bird's-eye view (what the walker is shown, seen from above, with its frustum and, for
 // stratified, its viewcell and bounding box), R starts/stops recording, P saves a screenshot,
 // 1-5 switch stratified's show styles (full, near, far objects, far texture, brute), Esc quits.
-void run_viewer(const World& world, const ViewerOptions& options);
+struct ViewerSummary {
+  int frames = 0;
+  double mean_frame_ms = 0, worst_frame_ms = 0;  // select + fetch + draw, as walk measures a frame
+  double mean_objects = 0, mean_triangles = 0;   // drawn per frame
+  uint64_t peak_resident_bytes = 0;              // the strategy's, at the end of a frame
+  std::vector<std::string> screenshots;          // written, in order (P, then --screenshot)
+  std::string recorded_file;                     // empty: nothing was recorded
+  size_t recorded_frames = 0;
+  bool stopped_by_signal = false;
+};
+ViewerSummary run_viewer(const World& world, const ViewerOptions& options);
 
 }  // namespace cellwalk
