@@ -21,6 +21,7 @@
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/core/process_memory.hpp"
 #include "render/gpu_mesh_cache.hpp"
+#include "render/text_overlay.hpp"
 #include "test_support.hpp"
 
 #define STB_IMAGE_STATIC
@@ -473,6 +474,42 @@ TEST_F(RendererTest, TextIsDrawnAtItsTopLeftCorner) {
   EXPECT_EQ(changed_pixels(before, after, 0, 0, kWidth, bottom), 0u);
   EXPECT_EQ(changed_pixels(before, after, 0, top, kWidth, kHeight), 0u);
   EXPECT_EQ(changed_pixels(before, after, 0, 0, 10, kHeight), 0u);
+}
+
+// Issue 16: the viewer's statistics ran off the window and were unreadable over a city. Text
+// now wraps at spaces inside the image and can lie on an opaque panel.
+TEST_F(RendererTest, LongTextWrapsInsideTheImageOnItsPanel) {
+  std::vector<DrawItem> none;
+  Renderer renderer(settings());
+  renderer.render(test_camera(), none, Meshes().provider());
+  const Image before = renderer.read_color();
+  const std::string text = "one two three four five six seven eight nine ten eleven twelve thirteen fourteen";
+  ASSERT_GT(render::text_size(text, 1.0f).x, float(kWidth)) << "the text must be wider than the image";
+  const Rgba8 panel = rgba8(10, 20, 30);
+  renderer.draw_text(4.0f, 4.0f, text, rgba8(255, 255, 255), 1.0f, panel);
+  const Image after = renderer.read_color();
+  const std::string wrapped = render::wrap_text(text, float(kWidth) - 8.0f, 1.0f);
+  const size_t lines = size_t(std::count(wrapped.begin(), wrapped.end(), '\n')) + 1;
+  EXPECT_GE(lines, 2u);
+  for (size_t start = 0; start < wrapped.size();) {
+    const size_t end = std::min(wrapped.find('\n', start), wrapped.size());
+    EXPECT_LE(render::text_size(wrapped.substr(start, end - start), 1.0f).x, float(kWidth) - 8.0f);
+    start = end + 1;
+  }
+  // Every word is kept, in order.
+  std::string joined = wrapped;
+  std::replace(joined.begin(), joined.end(), '\n', ' ');
+  EXPECT_EQ(joined, text);
+  // The panel covers the wrapped text's height (several lines) with its colour at the corners.
+  const auto pixel = [&after](int x, int y_from_top) {
+    const uint8_t* p = &after.rgba[(size_t(after.height - 1 - y_from_top) * after.width + x) * 4];
+    return rgba8(p[0], p[1], p[2]);
+  };
+  const int panel_bottom = int(4 + render::text_size(wrapped, 1.0f).y + 4);
+  EXPECT_EQ(pixel(1, 1), panel);
+  EXPECT_EQ(pixel(1, panel_bottom - 2), panel);
+  EXPECT_GT(panel_bottom, 4 + 12 * int(lines - 1)) << "the panel spans every line";
+  EXPECT_EQ(changed_pixels(before, after, 0, 0, kWidth, after.height - panel_bottom - 1), 0u) << "nothing below the panel";
 }
 
 // A 3×2 image whose bottom row (stored first) is red and top row blue.

@@ -385,11 +385,17 @@ void Renderer::draw_lines(const Camera& camera, std::span<const LineSegment> seg
   impl_->draw_overlay(vertices, GL_LINES, camera.view_projection());
 }
 
-void Renderer::draw_text(float x, float y, std::string_view text, Rgba8 color, float scale) {
+void Renderer::draw_text(float x, float y, std::string_view text, Rgba8 color, float scale, std::optional<Rgba8> panel) {
+  constexpr float kMargin = 4.0f;
+  const RenderSettings& s = impl_->settings;
+  const std::string wrapped = render::wrap_text(text, std::max(float(s.width) - x - kMargin, 1.0f), scale);
   std::vector<render::OverlayVertex>& vertices = impl_->overlay_vertices;
   vertices.clear();
-  render::append_text(x, y, text, color, scale, vertices);
-  const RenderSettings& s = impl_->settings;
+  if (panel) {
+    const Vec2 size = render::text_size(wrapped, scale);
+    render::append_rectangle(x - kMargin, y - kMargin, size.x + 2 * kMargin, size.y + 2 * kMargin, *panel, vertices);
+  }
+  render::append_text(x, y, wrapped, color, scale, vertices);
   // Pixels, y down from the top-left corner, as stb_easy_font lays text out.
   Mat4 pixels = glm::ortho(0.0f, float(s.width), float(s.height), 0.0f, -1.0f, 1.0f);
   impl_->draw_overlay(vertices, GL_TRIANGLES, pixels);

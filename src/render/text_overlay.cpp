@@ -1,6 +1,7 @@
 // Text overlay through stb_easy_font (Sean Barrett, public domain): quads to triangles.
 #include "render/text_overlay.hpp"
 
+#include <algorithm>
 #include <string>
 
 #pragma GCC diagnostic push
@@ -32,6 +33,42 @@ void append_text(float x, float y, std::string_view text, Rgba8 color, float sca
       out.push_back({corner[i].position * scale + origin, corner[i].color});
     }
   }
+}
+
+std::string wrap_text(std::string_view text, float max_width, float scale) {
+  const auto width = [scale](std::string line) { return float(stb_easy_font_width(line.data())) * scale; };
+  std::string out;
+  size_t start = 0;
+  while (start <= text.size()) {
+    const size_t end = std::min(text.find('\n', start), text.size());
+    std::string line(text.substr(start, end - start));
+    while (width(line) > max_width && line.size() > 1) {
+      // The longest head that fits, cut after a space when there is one.
+      size_t cut = line.size() - 1;
+      while (cut > 1 && width(line.substr(0, cut)) > max_width) --cut;
+      const size_t space = line.rfind(' ', cut);
+      if (space != std::string::npos && space > 0) cut = space + 1;
+      std::string head = line.substr(0, cut);
+      while (!head.empty() && head.back() == ' ') head.pop_back();
+      out += head + '\n';
+      line.erase(0, cut);
+    }
+    out += line;
+    if (end == text.size()) break;
+    out += '\n';
+    start = end + 1;
+  }
+  return out;
+}
+
+Vec2 text_size(std::string_view text, float scale) {
+  std::string copy(text);
+  return Vec2(float(stb_easy_font_width(copy.data())), float(stb_easy_font_height(copy.data()))) * scale;
+}
+
+void append_rectangle(float x, float y, float width, float height, Rgba8 color, std::vector<OverlayVertex>& out) {
+  const Vec3 a(x, y, 0), b(x + width, y, 0), c(x + width, y + height, 0), d(x, y + height, 0);
+  for (const Vec3& p : {a, b, c, a, c, d}) out.push_back({p, color});
 }
 
 }  // namespace cellwalk::render

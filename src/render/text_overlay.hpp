@@ -2,6 +2,7 @@
 // from quads, so no font texture is needed and the overlay shares the line program.
 #pragma once
 
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -21,5 +22,15 @@ static_assert(sizeof(OverlayVertex) == 16);
 // Characters outside printable ASCII draw nothing.
 void append_text(float x, float y, std::string_view text, Rgba8 color, float scale,
                  std::vector<OverlayVertex>& out);
+
+// `text` with its lines broken at spaces (or, for a word too long, anywhere) so that none is
+// wider than `max_width` pixels at `scale`.
+std::string wrap_text(std::string_view text, float max_width, float scale);
+
+// The size in pixels (width, height) of `text` drawn at `scale`.
+Vec2 text_size(std::string_view text, float scale);
+
+// Appends two triangles covering the rectangle from (x, y) to (x + width, y + height).
+void append_rectangle(float x, float y, float width, float height, Rgba8 color, std::vector<OverlayVertex>& out);
 
 }  // namespace cellwalk::render

@@ -10,12 +10,15 @@
 #include <filesystem>
 
 #include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/runtime/floor_probe.hpp"
 #include "cellwalk/runtime/run_budget.hpp"
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/render/window.hpp"
 #include "cellwalk/systems/stratified/stratified_strategy.hpp"
+#include "cellwalk/lod/screen_error.hpp"
 #include "core/stopwatch.hpp"
+#include "systems/brute/brute.hpp"
 
 namespace cellwalk {
 namespace {
@@ -24,7 +27,11 @@ constexpr float kEyeHeight = 1.7f;      // metres above the world's floor, at mo
 constexpr float kWalkSpeed = 3.0f;      // metres per second, at most a twentieth of the world's
                                         // extent a second; Shift multiplies by kRunFactor
 constexpr float kRunFactor = 6.0f;
+constexpr float kStepUp = 0.5f;         // the highest step a walker climbs, in eye heights
+constexpr uint64_t kFloorCacheBytes = uint64_t(4) << 20;  // at most a sixteenth of the strategy's budget
 constexpr float kMouseDegPerPixel = 0.15f;
+const Rgba8 kChosenColour = rgba8(255, 210, 0);  // the bird's-eye view's boxes of the chosen set
+const Rgba8 kPanelColour = rgba8(16, 16, 24);    // behind the statistics
 
 // Where a viewer starts: on the first navigation edge, looking along it.
 void place_at_start(const SceneInfo& info, Camera& camera) {
@@ -75,9 +82,18 @@ struct ViewerState {
   double clock = 0;
   CameraPath recorded;
   bool screenshot_requested = false;
+  bool show_help = false;
 };
 
-void move(ViewerState& s, const Window& window, float dt) {
+// Walking keeps the eye at eye height above the floor under it: a surface up to a step above
+// the current floor is climbed, and with nothing under the walker it drops to the one below.
+void stand_on_floor(ViewerState& s, FloorProbe& probe) {
+  const Vec3 p = s.camera.position;
+  s.floor_y = probe.floor_below(Vec3(p.x, s.floor_y + kStepUp * s.eye_height, p.z));
+  s.camera.position.y = s.floor_y + s.eye_height;
+}
+
+void move(ViewerState& s, const Window& window, FloorProbe& probe, float dt) {
   float speed = s.walk_speed * (window.key_down(GLFW_KEY_LEFT_SHIFT) ? kRunFactor : 1.0f) * dt;
   Vec3 forward = s.camera.forward(), right = s.camera.right();
   if (!s.fly) forward = glm::normalize(Vec3(forward.x, 0, forward.z));
@@ -91,7 +107,7 @@ void move(ViewerState& s, const Window& window, float dt) {
   if (window.key_down(GLFW_KEY_LEFT)) s.camera.yaw_deg += 90.0f * dt;
   if (window.key_down(GLFW_KEY_RIGHT)) s.camera.yaw_deg -= 90.0f * dt;
   if (glm::length(step) > 0) s.camera.position += glm::normalize(step) * speed;
-  if (!s.fly) s.camera.position.y = s.floor_y + s.eye_height;
+  if (!s.fly) stand_on_floor(s, probe);
 }
 
 std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, const std::string& strategy) {
@@ -99,13 +115,15 @@ std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, 
   std::snprintf(text, sizeof text,
                 "%s  %.1f fps  frame %.1f ms (query %.1f io %.1f decode %.1f render %.1f)\n"
                 "%llu objects  %llu triangles  %.1f MiB resident\n"
-                "%s%s%s  pos %.1f %.1f %.1f  yaw %.0f pitch %.0f\n"
-                "WASD move, drag look, Shift run, F fly, B bird's-eye, R record, P screenshot, 1-5 show (stratified), Esc quit",
+                "%s%s%s  pos %.1f %.1f %.1f  yaw %.0f pitch %.0f  H help%s",
                 strategy.c_str(), fps, f.frame_ms, f.query_ms, f.io_ms, f.decode_ms, f.render_ms,
                 (unsigned long long)f.objects, (unsigned long long)f.triangles, f.resident_bytes / 1048576.0,
                 s.fly ? "fly" : "walk", s.birds_eye ? "  bird's-eye" : "",
                 s.recording ? "  RECORDING" : "", s.camera.position.x, s.camera.position.y,
-                s.camera.position.z, s.camera.yaw_deg, s.camera.pitch_deg);
+                s.camera.position.z, s.camera.yaw_deg, s.camera.pitch_deg,
+                s.show_help ? "\nWASD move, drag look, Shift run, F fly, B bird's-eye, R record, P screenshot, "
+                              "1-5 show (stratified), H hide this, Esc quit"
+                            : "");
   return text;
 }
 
@@ -149,7 +167,9 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
   const RunBudget budget = split_run_budget(options.budget_bytes, 0, std::nullopt);
   StrategyOptions strategy_options;
   strategy_options.viewport_height_px = float(fb_height);
-  strategy_options.memory_budget_bytes = budget.strategy_bytes;
+  const uint64_t floor_cache = budget.total_bytes > 0 ? std::min(kFloorCacheBytes, budget.strategy_bytes / 16) : kFloorCacheBytes;
+  strategy_options.memory_budget_bytes = budget.total_bytes > 0 ? budget.strategy_bytes - floor_cache : 0;
+  FloorProbe probe(scene, floor_cache);
   auto strategy = make_strategy(options.strategy, scene, strategy_options);
   RenderSettings settings;
   settings.width = fb_width;
@@ -161,14 +181,15 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
 
   ViewerState s;
   s.birds_eye = options.birds_eye;
+  s.show_help = fb_width >= 800;  // a small window keeps the scene in view: H shows the keys
   s.camera.fov_y_deg = options.fov_y_deg;
   s.camera.aspect = float(fb_width) / float(fb_height);
   place_at_start(scene.info(), s.camera);
-  // A walker in a 1 m scan or a 10 km plant: eye height and speed follow the world's size, the
-  // floor is its lowest point (the backdrop's ground, fit_backdrop).
+  // A walker in a 1 m scan or a 10 km plant: eye height and speed follow the world's size; the
+  // floor is the surface under the start (else the world's lowest point, the backdrop's ground).
   const Aabb& world_box = scene.info().bounds;
-  s.floor_y = world_box.min.y;
   s.eye_height = std::min(kEyeHeight, std::max(world_box.size().y / 2, 1e-3f));
+  s.floor_y = probe.floor_below(s.camera.position);
   s.walk_speed = std::min(kWalkSpeed, std::max(std::max(world_box.size().x, world_box.size().z) / 20, 1e-3f));
   CameraPath replay;
   if (!options.replay_file.empty()) replay = read_path(options.replay_file);
@@ -189,6 +210,7 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
     if (key == GLFW_KEY_F) s.fly = !s.fly;
     if (key == GLFW_KEY_B) s.birds_eye = !s.birds_eye;
     if (key == GLFW_KEY_P) s.screenshot_requested = true;
+    if (key == GLFW_KEY_H) s.show_help = !s.show_help;
     // Stratified's show styles (§5.1): 1 full, 2 near, 3 far objects, 4 far texture, 5 brute.
     if (key >= GLFW_KEY_1 && key <= GLFW_KEY_5 && is_stratified_strategy_name(options.strategy)) {
       static const char* const kShows[] = {"full", "near", "far-objects", "far-texture", "brute"};
@@ -237,16 +259,30 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
       apply(f, s.camera);
       s.clock = f.time;
     } else {
-      move(s, window, float(dt));
+      move(s, window, probe, float(dt));
     }
     if (s.recording) s.recorded.frames.push_back({s.clock, s.camera.position, s.camera.yaw_deg, s.camera.pitch_deg});
 
     FrameStats stats;
     if (s.birds_eye) {
       const Camera top = birds_eye_camera(scene.info().bounds, s.camera);
-      // What the walker is shown, seen from above (select from the walker, draw from the top).
-      stats = render_frame(*strategy, *renderer, s.camera, s.clock, nullptr, &top);
+      // What the walker is shown, seen from above (select from the walker, draw from the top),
+      // each object no finer than a pixel's error from up there needs, so the view stays
+      // interactive whatever the walker's strategy chose; its boxes highlighted over the
+      // overview of every object's box.
+      const Lens top_lens = lens_of(top, float(settings.height));
+      const auto coarsen = [&](std::vector<DrawItem>& items) {
+        if (!strategy->serves_every_level()) return;
+        for (DrawItem& item : items)
+          if (item.kind == DrawKind::kObject && !item.transient && item.id < scene.object_count())
+            item.lod = std::max(item.lod, level_for_screen_error(scene, item.id, top.position, top_lens, 1.0f));
+      };
+      std::vector<DrawItem> chosen;
+      stats = render_frame(*strategy, *renderer, s.camera, s.clock, &chosen, &top, coarsen);
       std::vector<LineSegment> lines = boxes;
+      for (const DrawItem& item : chosen)
+        if (item.kind == DrawKind::kObject && item.id < scene.object_count())
+          append_box_lines(scene.object(item.id).bounds, kChosenColour, lines);
       strategy->overlay(lines);
       add_frustum(s.camera, 0.05f * glm::length(scene.info().bounds.size()), lines);
       renderer->draw_lines(top, lines);
@@ -260,7 +296,9 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
     summary.mean_triangles += double(stats.triangles);
     summary.peak_resident_bytes = std::max(summary.peak_resident_bytes, stats.resident_bytes);
     fps = fps == 0 ? 1000.0 / std::max(stats.frame_ms, 0.01) : 0.9 * fps + 100.0 / std::max(stats.frame_ms, 0.01);
-    renderer->draw_text(8, 8, overlay_text(s, stats, fps, strategy->name()), rgba8(255, 255, 255), 1.5f);
+    // Larger glyphs only where the window has room for them.
+    renderer->draw_text(8, 8, overlay_text(s, stats, fps, strategy->name()), rgba8(255, 255, 255),
+                        settings.width >= 1200 ? 1.5f : 1.0f, kPanelColour);
     int w, h;
     window.framebuffer_size(w, h);
     renderer->present(w, h);

@@ -6,12 +6,14 @@
 namespace cellwalk {
 
 FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time,
-                        std::vector<DrawItem>* drawn, const Camera* render_from) {
+                        std::vector<DrawItem>* drawn, const Camera* render_from,
+                        const std::function<void(std::vector<DrawItem>&)>& adjust) {
   FrameStats stats;
   stats.time = time;
   Stopwatch frame_watch;
   std::vector<DrawItem> items;
   strategy.select(camera, items, stats);
+  if (adjust) adjust(items);
   // The renderer asks for geometry it does not hold; the strategy's I/O and decode time is
   // measured inside the render call and taken out of the render time below.
   const double io_before = stats.io_ms, decode_before = stats.decode_ms;

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -152,8 +153,11 @@ class Renderer {
   void draw_lines(const Camera& camera, std::span<const LineSegment> segments);
   // ASCII text in stb_easy_font's glyphs (about 7 px tall on 12 px lines at scale 1, times
   // `scale`); (x, y) is the top-left corner in pixels from the image's top-left; '\n' starts
-  // a new line.
-  void draw_text(float x, float y, std::string_view text, Rgba8 color, float scale = 1.0f);
+  // a new line, and lines are wrapped at spaces to stay inside the image. With `panel`, the
+  // text lies on an opaque rectangle of that colour (a 4-pixel margin around it), so it stays
+  // readable over any scene.
+  void draw_text(float x, float y, std::string_view text, Rgba8 color, float scale = 1.0f,
+                 std::optional<Rgba8> panel = std::nullopt);
 
   Image read_color() const;
   IdImage read_ids() const;

@@ -24,13 +24,7 @@ struct ViewerOptions {
                                 // split as a walk's (run_budget.hpp)
 };
 
-// Runs until the window is closed, Escape is pressed, max_frames is reached, a replayed path
-// ends or the process gets SIGINT or SIGTERM (the screenshot and the recording are still
-// written). P writes screenshot-N.png in the working folder, N the first number not taken.
-// Keys: W/A/S/D move, Q/E down/up (fly), mouse drag looks, Shift runs, F walk/fly,
-// B bird's-eye view (what the walker is shown, seen from above, with its frustum and, for
-// stratified, its viewcell and bounding box), R starts/stops recording, P saves a screenshot,
-// 1-5 switch stratified's show styles (full, near, far objects, far texture, brute), Esc quits.
+// What a run showed, for `view --json` (docs/json.md).
 struct ViewerSummary {
   int frames = 0;
   double mean_frame_ms = 0, worst_frame_ms = 0;  // select + fetch + draw, as walk measures a frame
@@ -41,6 +35,18 @@ struct ViewerSummary {
   size_t recorded_frames = 0;
   bool stopped_by_signal = false;
 };
+
+// Runs until the window is closed, Escape is pressed, max_frames is reached, a replayed path
+// ends or the process gets SIGINT or SIGTERM (the screenshot and the recording are still
+// written). P writes screenshot-N.png in the working folder, N the first number not taken.
+// Keys: W/A/S/D move, Q/E down/up (fly), mouse drag looks, Shift runs, F walk/fly,
+// B bird's-eye view (what the walker is shown, seen from above, each object no finer than
+// a pixel's error from up there needs when the strategy serves every level, the chosen set's
+// boxes in yellow over every object's box, with the walker's frustum and, for stratified, its
+// viewcell and bounding box), R starts/stops recording, P saves a screenshot, H shows the keys,
+// 1-5 switch stratified's show styles (full, near, far objects, far texture, brute), Esc quits.
+// Walking keeps the eye at eye height over the floor under it (FloorProbe; steps up to half
+// an eye height are climbed); the statistics wrap inside the window on a dark panel.
 ViewerSummary run_viewer(const World& world, const ViewerOptions& options);
 
 }  // namespace cellwalk

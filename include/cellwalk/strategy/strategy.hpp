@@ -40,6 +40,11 @@ class Strategy {
   // the data is not available this frame (the frame then counts as a stall).
   virtual const Mesh* mesh(const DrawItem& item, FrameStats& stats) = 0;
 
+  // True when mesh() gives any level of any object (it reads through a GeometryStore, with no
+  // bookkeeping of what was drawn), so a view may draw an object at another level than selected:
+  // the viewer's bird's-eye view draws the chosen set coarser, as seen from far above.
+  virtual bool serves_every_level() const { return false; }
+
   // The far faces (stratified rendering) the last select() chose, drawn as background under the
   // items; their images stay valid until the next select(). Empty for every other strategy.
   virtual std::span<const FarFace> far_faces() const { return {}; }

@@ -38,6 +38,7 @@ class BruteStrategy : public Strategy {
 
   std::string name() const override { return lod_ ? "lod" : cull_ ? "brute" : "ground-truth"; }
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  bool serves_every_level() const override { return true; }
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
   uint64_t resident_bytes() const override { return store_.resident_bytes(); }
   uint64_t peak_resident_bytes() const override { return store_.peak_resident_bytes(); }

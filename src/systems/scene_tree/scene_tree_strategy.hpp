@@ -33,6 +33,7 @@ class SceneTreeStrategy : public Strategy {
   // Throws Error if the camera has never been inside a view cell with a visible set (VSC, PB):
   // the DoV exists only there (thesis §6.2.2). Outside the cells the last cell's VD is kept.
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  bool serves_every_level() const override { return true; }
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
   uint64_t resident_bytes() const override { return fixed_bytes_ + store_->resident_bytes(); }
   uint64_t peak_resident_bytes() const override { return fixed_bytes_ + store_->peak_resident_bytes(); }

@@ -54,6 +54,7 @@ class StratifiedStrategy : public Strategy {
   std::string name() const override;
   // Throws Error when the camera leaves the viewcells or stands in a cell `--along` left unbaked.
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  bool serves_every_level() const override { return true; }
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
   std::span<const FarFace> far_faces() const override;
   // The current viewcell in cyan and its bounding box in white (the thesis's bird's-eye view,

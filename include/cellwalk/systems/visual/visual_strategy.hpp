@@ -55,6 +55,7 @@ class VisualStrategy : public Strategy {
   ~VisualStrategy() override;
   std::string name() const override;
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  bool serves_every_level() const override { return true; }
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
   uint64_t resident_bytes() const override;
   uint64_t peak_resident_bytes() const override;

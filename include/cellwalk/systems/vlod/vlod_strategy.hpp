@@ -47,6 +47,7 @@ class VlodStrategy : public Strategy {
   // Throws Error when the camera leaves the view cells, stands in a cell `pvs --along` skipped,
   // or renders larger or wider than the levels were chosen for (their bound would not hold).
   void select(const Camera& camera, std::vector<DrawItem>& items, FrameStats& stats) override;
+  bool serves_every_level() const override { return true; }
   const Mesh* mesh(const DrawItem& item, FrameStats& stats) override;
   uint64_t resident_bytes() const override;
   uint64_t peak_resident_bytes() const override;
