@@ -178,6 +178,17 @@ TEST_F(ViewerTest, ASignalEndsTheRunAndTheScreenshotIsStillWritten) {
   EXPECT_GT(distinct_colours(load_png(dir_.file("last.png"))), 10) << r.output;
 }
 
+// Tab switches between the strategies given; each is made once at start, so one that cannot run
+// on this world stops the viewer at once, naming it.
+TEST_F(ViewerTest, SeveralStrategiesAreCheckedAtStart) {
+  const auto both = view("--frames 2 --strategy lod --strategy brute --json");
+  ASSERT_EQ(both.exit_code, 0) << both.output;
+  EXPECT_EQ(test::json_output(both)["strategies"], nlohmann::json::array({"lod", "brute"}));
+  const auto unusable = view("--frames 2 --strategy brute --strategy vlod");
+  EXPECT_NE(unusable.exit_code, 0);
+  EXPECT_NE(unusable.output.find("vlod"), std::string::npos) << unusable.output;
+}
+
 TEST_F(ViewerTest, NoDisplayGivesAClearError) {
   const std::string command = "env -u DISPLAY -u WAYLAND_DISPLAY " + test::cellwalk_binary() + " view " +
                               scene_ + " --frames 1 2>&1";

@@ -20,7 +20,9 @@ void register_view(CLI::App& root) {
   };
   auto args = std::make_shared<Args>();
   cmd->add_option("world", args->scene, "World file (.cww)")->required();
-  cmd->add_option("--strategy", args->options.strategy, "Strategy: " + CLI::detail::join(strategy_names()))->capture_default_str();
+  cmd->add_option("--strategy", args->options.strategies,
+                  "Strategy (repeat it for several: Tab switches between them): " + CLI::detail::join(strategy_names()))
+      ->capture_default_str();
   cmd->add_option("--width", args->options.width, "Window width")->capture_default_str()->check(integer_in(16, 8192));
   cmd->add_option("--height", args->options.height, "Window height")->capture_default_str()->check(integer_in(16, 8192));
   cmd->add_option("--fov", args->options.fov_y_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));
@@ -39,7 +41,7 @@ void register_view(CLI::App& root) {
     World world(args->scene);
     const ViewerSummary v = run_viewer(world, args->options);
     if (args->json)
-      print_json("view", {{"input", args->scene}, {"strategy", args->options.strategy}, {"frames", v.frames},
+      print_json("view", {{"input", args->scene}, {"strategies", args->options.strategies}, {"frames", v.frames},
                           {"mean_frame_ms", v.mean_frame_ms}, {"worst_frame_ms", v.worst_frame_ms},
                           {"mean_objects", v.mean_objects}, {"mean_triangles", v.mean_triangles},
                           {"peak_resident_bytes", v.peak_resident_bytes}, {"screenshots", v.screenshots},

@@ -7,6 +7,9 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include <exception>
+#include <utility>
+
 #include "cellwalk/core/error.hpp"
 
 namespace cellwalk {
@@ -43,26 +46,35 @@ class GlfwLibrary {
 struct Window::Impl {
   GLFWwindow* window = nullptr;
   WindowCallbacks callbacks;
+  // An exception must not unwind through GLFW's C frames: the first one a callback throws is
+  // kept here (later events are dropped) and rethrown by poll_events() once GLFW returns.
+  std::exception_ptr pending;
 
   static Impl& of(GLFWwindow* window) {
     return *static_cast<Impl*>(glfwGetWindowUserPointer(window));
   }
+  template <class F, class... A>
+  static void call(GLFWwindow* w, F WindowCallbacks::*member, A... args) {
+    Impl& impl = of(w);
+    if (impl.pending || !(impl.callbacks.*member)) return;
+    try {
+      (impl.callbacks.*member)(args...);
+    } catch (...) {
+      impl.pending = std::current_exception();
+    }
+  }
   void install_callbacks() {
     glfwSetWindowUserPointer(window, this);
     glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
-      if (auto& f = of(w).callbacks.key) f(key, action, mods);
+      call(w, &WindowCallbacks::key, key, action, mods);
     });
     glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int mods) {
-      if (auto& f = of(w).callbacks.mouse_button) f(button, action, mods);
+      call(w, &WindowCallbacks::mouse_button, button, action, mods);
     });
-    glfwSetCursorPosCallback(window, [](GLFWwindow* w, double x, double y) {
-      if (auto& f = of(w).callbacks.cursor) f(x, y);
-    });
-    glfwSetScrollCallback(window, [](GLFWwindow* w, double dx, double dy) {
-      if (auto& f = of(w).callbacks.scroll) f(dx, dy);
-    });
+    glfwSetCursorPosCallback(window, [](GLFWwindow* w, double x, double y) { call(w, &WindowCallbacks::cursor, x, y); });
+    glfwSetScrollCallback(window, [](GLFWwindow* w, double dx, double dy) { call(w, &WindowCallbacks::scroll, dx, dy); });
     glfwSetFramebufferSizeCallback(window, [](GLFWwindow* w, int width, int height) {
-      if (auto& f = of(w).callbacks.framebuffer_size) f(width, height);
+      call(w, &WindowCallbacks::framebuffer_size, width, height);
     });
   }
 };
@@ -106,6 +118,7 @@ void Window::request_close() {
 }
 void Window::poll_events() {
   glfwPollEvents();
+  if (std::exception_ptr e = std::exchange(impl_->pending, nullptr)) std::rethrow_exception(e);
 }
 void Window::swap_buffers() {
   glfwSwapBuffers(impl_->window);

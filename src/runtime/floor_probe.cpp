@@ -21,47 +21,71 @@ float highest_surface_below(const Mesh& mesh, const Vec3& from) {
     const float u = ((b.x - from.x) * (c.z - from.z) - (c.x - from.x) * (b.z - from.z)) / area;
     const float v = ((c.x - from.x) * (a.z - from.z) - (a.x - from.x) * (c.z - from.z)) / area;
     const float w = 1.0f - u - v;
-    if (u < 0 || v < 0 || w < 0) continue;
+    constexpr float kOnEdge = -1e-5f;
+    if (u < kOnEdge || v < kOnEdge || w < kOnEdge) continue;
     const float y = u * a.y + v * b.y + w * c.y;
     if (y <= from.y && y > best) best = y;
   }
   return best;
 }
 
-FloorProbe::FloorProbe(const World& world, uint64_t cache_bytes) : world_(world), cache_bytes_(cache_bytes) {}
+namespace {
 
-const Mesh& FloorProbe::mesh(ObjectId id, Mesh& uncached) {
+// What a cache entry holds beyond its arrays (map node, list node, vector headers).
+constexpr uint64_t kEntryOverheadBytes = 160;
+
+}  // namespace
+
+FloorProbe::FloorProbe(const World& world, float tolerance, uint64_t cache_bytes)
+    : world_(world), tolerance_(tolerance), cache_bytes_(cache_bytes) {}
+
+const Mesh* FloorProbe::mesh(ObjectId id) {
   if (auto it = cache_.find(id); it != cache_.end()) {
     order_.splice(order_.begin(), order_, it->second.at);
-    return it->second.mesh;
+    return &it->second.mesh;
   }
-  Mesh m = world_.decode_level(id, 0, world_.read_level(id, 0));
+  const ObjectRecord& o = world_.object(id);
+  uint32_t level = 0;
+  while (level + 1 < o.lod_count && world_.lod(id, level + 1).error <= tolerance_) ++level;
+  // Positions and indices only, as the decoded mesh will hold them: one larger than the whole
+  // cache is not read at all.
+  const LodRecord& lod = world_.lod(id, level);
+  if (uint64_t(lod.triangles) * 3 * sizeof(uint32_t) + kEntryOverheadBytes > cache_bytes_) {
+    ++skipped_;
+    return nullptr;
+  }
+  Mesh m = world_.decode_level(id, level, world_.read_level(id, level));
   m.normals = {};
   m.colors = {};
-  const uint64_t bytes = m.byte_size();
-  if (bytes > cache_bytes_) return uncached = std::move(m);
+  const uint64_t bytes = m.byte_size() + kEntryOverheadBytes;
+  if (bytes > cache_bytes_) {
+    ++skipped_;
+    return nullptr;
+  }
   while (cached_bytes_ + bytes > cache_bytes_) {
     const auto last = cache_.find(order_.back());
-    cached_bytes_ -= last->second.mesh.byte_size();
+    cached_bytes_ -= last->second.mesh.byte_size() + kEntryOverheadBytes;
     cache_.erase(last);
     order_.pop_back();
   }
   order_.push_front(id);
   cached_bytes_ += bytes;
-  return cache_.emplace(id, Entry{std::move(m), order_.begin()}).first->second.mesh;
+  return &cache_.emplace(id, Entry{std::move(m), order_.begin()}).first->second.mesh;
 }
 
 float FloorProbe::floor_below(const Vec3& from) {
+  if (last_ && last_->first == from) return last_->second;
   float floor = -std::numeric_limits<float>::infinity();
   for (ObjectId id = 0; id < world_.object_count(); ++id) {
     const Aabb& box = world_.object(id).bounds;
     if (from.x < box.min.x || from.x > box.max.x || from.z < box.min.z || from.z > box.max.z || box.min.y > from.y ||
         box.max.y <= floor)
       continue;
-    Mesh uncached;
-    floor = std::max(floor, highest_surface_below(mesh(id, uncached), from));
+    if (const Mesh* m = mesh(id)) floor = std::max(floor, highest_surface_below(*m, from));
   }
-  return std::isinf(floor) ? world_.info().bounds.min.y : floor;
+  if (std::isinf(floor)) floor = world_.info().bounds.min.y;
+  last_ = {from, floor};
+  return floor;
 }
 
 }  // namespace cellwalk

@@ -10,6 +10,7 @@
 #include <filesystem>
 
 #include "cellwalk/core/camera_path.hpp"
+#include "cellwalk/core/error.hpp"
 #include "cellwalk/runtime/floor_probe.hpp"
 #include "cellwalk/runtime/run_budget.hpp"
 #include "cellwalk/runtime/strategies.hpp"
@@ -29,6 +30,7 @@ constexpr float kWalkSpeed = 3.0f;      // metres per second, at most a twentiet
 constexpr float kRunFactor = 6.0f;
 constexpr float kStepUp = 0.5f;         // the highest step a walker climbs, in eye heights
 constexpr uint64_t kFloorCacheBytes = uint64_t(4) << 20;  // at most a sixteenth of the strategy's budget
+constexpr float kFloorTolerance = 0.02f;  // floors are probed on levels this many eye heights coarse
 constexpr float kMouseDegPerPixel = 0.15f;
 const Rgba8 kChosenColour = rgba8(255, 210, 0);  // the bird's-eye view's boxes of the chosen set
 const Rgba8 kPanelColour = rgba8(16, 16, 24);    // behind the statistics
@@ -122,7 +124,7 @@ std::string overlay_text(const ViewerState& s, const FrameStats& f, double fps, 
                 s.recording ? "  RECORDING" : "", s.camera.position.x, s.camera.position.y,
                 s.camera.position.z, s.camera.yaw_deg, s.camera.pitch_deg,
                 s.show_help ? "\nWASD move, drag look, Shift run, F fly, B bird's-eye, R record, P screenshot, "
-                              "1-5 show (stratified), H hide this, Esc quit"
+                              "Tab next strategy, 1-5 show (stratified), H hide this, Esc quit"
                             : "");
   return text;
 }
@@ -169,8 +171,20 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
   strategy_options.viewport_height_px = float(fb_height);
   const uint64_t floor_cache = budget.total_bytes > 0 ? std::min(kFloorCacheBytes, budget.strategy_bytes / 16) : kFloorCacheBytes;
   strategy_options.memory_budget_bytes = budget.total_bytes > 0 ? budget.strategy_bytes - floor_cache : 0;
-  FloorProbe probe(scene, floor_cache);
-  auto strategy = make_strategy(options.strategy, scene, strategy_options);
+  // A walker in a 1 m scan or a 10 km plant: eye height and speed follow the world's size.
+  const Aabb& world_box = scene.info().bounds;
+  const float eye_height = std::min(kEyeHeight, std::max(world_box.size().y / 2, 1e-3f));
+  FloorProbe probe(scene, kFloorTolerance * eye_height, floor_cache);
+  if (options.strategies.empty()) fail("view", "no strategy given; name one with --strategy");
+  // Every strategy is made once first, so one that cannot run here fails before the window is
+  // in use; Tab then switches between them, one alive at a time (the budget is for one).
+  for (size_t i = 1; i < options.strategies.size(); ++i) make_strategy(options.strategies[i], scene, strategy_options);
+  size_t current = 0;
+  auto strategy = make_strategy(options.strategies[0], scene, strategy_options);
+  const auto switch_to = [&](const std::string& name) {
+    strategy.reset();
+    strategy = make_strategy(name, scene, strategy_options);
+  };
   RenderSettings settings;
   settings.width = fb_width;
   settings.height = fb_height;
@@ -185,10 +199,9 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
   s.camera.fov_y_deg = options.fov_y_deg;
   s.camera.aspect = float(fb_width) / float(fb_height);
   place_at_start(scene.info(), s.camera);
-  // A walker in a 1 m scan or a 10 km plant: eye height and speed follow the world's size; the
-  // floor is the surface under the start (else the world's lowest point, the backdrop's ground).
-  const Aabb& world_box = scene.info().bounds;
-  s.eye_height = std::min(kEyeHeight, std::max(world_box.size().y / 2, 1e-3f));
+  // The floor is the surface under the start (else the world's lowest point, the backdrop's
+  // ground).
+  s.eye_height = eye_height;
   s.floor_y = probe.floor_below(s.camera.position);
   s.walk_speed = std::min(kWalkSpeed, std::max(std::max(world_box.size().x, world_box.size().z) / 20, 1e-3f));
   CameraPath replay;
@@ -207,14 +220,21 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
   callbacks.key = [&](int key, int action, int) {
     if (action != GLFW_PRESS) return;
     if (key == GLFW_KEY_ESCAPE) window.request_close();
-    if (key == GLFW_KEY_F) s.fly = !s.fly;
+    if (key == GLFW_KEY_F) {
+      s.fly = !s.fly;
+      if (!s.fly) s.floor_y = probe.floor_below(s.camera.position);  // land where the eye is
+    }
     if (key == GLFW_KEY_B) s.birds_eye = !s.birds_eye;
     if (key == GLFW_KEY_P) s.screenshot_requested = true;
     if (key == GLFW_KEY_H) s.show_help = !s.show_help;
     // Stratified's show styles (§5.1): 1 full, 2 near, 3 far objects, 4 far texture, 5 brute.
-    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_5 && is_stratified_strategy_name(options.strategy)) {
+    if (key == GLFW_KEY_TAB && options.strategies.size() > 1) {
+      current = (current + 1) % options.strategies.size();
+      switch_to(options.strategies[current]);
+    }
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_5 && is_stratified_strategy_name(options.strategies[current])) {
       static const char* const kShows[] = {"full", "near", "far-objects", "far-texture", "brute"};
-      strategy = make_strategy(std::string("stratified:show=") + kShows[key - GLFW_KEY_1], scene, strategy_options);
+      switch_to(std::string("stratified:show=") + kShows[key - GLFW_KEY_1]);
     }
     if (key == GLFW_KEY_R) {
       if (s.recording) save_recording();

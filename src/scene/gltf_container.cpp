@@ -45,7 +45,7 @@ bool is_fallback(const Json& buffer) {
   if (!buffer.contains("extensions") || !buffer["extensions"].is_object()) return false;
   for (const char* n : {"EXT_meshopt_compression", "KHR_meshopt_compression"}) {
     const Json& e = buffer["extensions"];
-    if (e.contains(n) && e[n].is_object() && e[n].value("fallback", false)) return true;
+    if (e.contains(n) && e[n].is_object() && e[n].contains("fallback") && e[n]["fallback"] == true) return true;
   }
   return false;
 }
@@ -125,8 +125,8 @@ GlbWriter::GlbWriter(const std::vector<std::vector<uint8_t>>& buffers) {
 }
 
 void GlbWriter::rebase(Json& view, const std::string& where) const {
+  view_bytes(view, where);  // checks the view lies inside its buffer
   const uint64_t b = whole(view, "buffer", 0, where, true);
-  if (b >= base_.size()) fail(where, "names buffer " + std::to_string(b) + ", which does not exist");
   view["buffer"] = 0;
   view["byteOffset"] = base_[b] + whole(view, "byteOffset", 0, where);
 }
@@ -142,15 +142,17 @@ std::span<const uint8_t> GlbWriter::view_bytes(const Json& view, const std::stri
 }
 
 uint64_t GlbWriter::append(uint64_t size, const std::string& where) {
-  if (size > kMaxChunkBytes || bin_.size() + size > kMaxChunkBytes) fail(where, "decodes to more than 4 GiB");
+  if (size > kMaxChunkBytes || bin_.size() + size > kMaxChunkBytes)
+    fail(where, "decodes to more than 4 GiB, more than a GLB can hold; split the model into smaller files");
   const uint64_t at = bin_.size();
   bin_.resize((at + size + 3) / 4 * 4, 0);
   return at;
 }
 
 uint64_t GlbWriter::add_view(Json& doc, std::span<const uint8_t> bytes, const std::string& where) {
-  const uint64_t at = append(bytes.size(), where);
-  std::copy(bytes.begin(), bytes.end(), bin_.begin() + at);
+  const std::vector<uint8_t> copy(bytes.begin(), bytes.end());  // `bytes` may lie in bin_, which append() may move
+  const uint64_t at = append(copy.size(), where);
+  std::copy(copy.begin(), copy.end(), bin_.begin() + at);
   doc["bufferViews"].push_back({{"buffer", 0}, {"byteOffset", at}, {"byteLength", bytes.size()}});
   return doc["bufferViews"].size() - 1;
 }

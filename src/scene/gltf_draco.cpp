@@ -34,7 +34,9 @@ std::unique_ptr<draco::Mesh> decode_stream(std::span<const uint8_t> data, const 
   buffer.Init(reinterpret_cast<const char*>(data.data()), data.size());
   draco::Decoder decoder;
   auto decoded = decoder.DecodeMeshFromBuffer(&buffer);
-  if (!decoded.ok()) fail(where, std::string("the Draco data does not decode (") + decoded.status().error_msg() + ")");
+  if (!decoded.ok())
+    fail(where, std::string("the Draco data does not decode (") + decoded.status().error_msg() +
+                    "); the file is damaged: re-export it, or without Draco compression");
   return std::move(decoded).value();
 }
 
@@ -60,7 +62,8 @@ const Json& accessor_at(const Json& doc, const Json& index, const std::string& w
 }
 
 int components_of(const Json& accessor) {
-  const std::string type = accessor.value("type", std::string());
+  if (!accessor.contains("type") || !accessor["type"].is_string()) return 0;
+  const std::string type = accessor["type"].get<std::string>();
   return type == "SCALAR" ? 1 : type == "VEC2" ? 2 : type == "VEC3" ? 3 : type == "VEC4" ? 4 : 0;
 }
 
@@ -68,6 +71,15 @@ int components_of(const Json& accessor) {
 // decoded mesh's faces and points.
 void decode_primitive(Json& doc, Json& primitive, GlbWriter& out, const std::string& where) {
   const Json ext = *draco_of(primitive);
+  // Draco compresses triangles (lists or strips) and decodes to a list; points and lines are
+  // skipped by the reader, so their streams are not decoded.
+  const Json mode = primitive.contains("mode") ? primitive["mode"] : Json(4);
+  if (mode != 4 && mode != 5) {
+    primitive["extensions"].erase(kName);
+    return;
+  }
+  primitive["mode"] = 4;
+  if (doc.contains("accessors") && !doc["accessors"].is_array()) fail(where, "the file's accessors are not a list");
   const uint64_t view = whole(ext, "bufferView", 0, where, true);
   if (view >= doc["bufferViews"].size()) fail(where, "names bufferView " + std::to_string(view) + ", which does not exist");
   const std::unique_ptr<draco::Mesh> mesh = decode_stream(out.view_bytes(doc["bufferViews"][view], where), where);
@@ -96,9 +108,12 @@ void decode_primitive(Json& doc, Json& primitive, GlbWriter& out, const std::str
       fail(at, "the accessor's type has " + std::to_string(n) + " components and the Draco attribute " +
                    std::to_string(attribute->num_components()));
     std::vector<float> values(points * n);
-    for (uint32_t i = 0; i < points; ++i)
-      if (!attribute->ConvertValue<float>(attribute->mapped_index(draco::PointIndex(i)), int8_t(n), &values[size_t(i) * n]))
-        fail(at, "a value of the Draco attribute cannot be read as a number");
+    for (uint32_t i = 0; i < points; ++i) {
+      const draco::AttributeValueIndex value = attribute->mapped_index(draco::PointIndex(i));
+      if (value.value() >= attribute->size() ||
+          !attribute->ConvertValue<float>(value, int8_t(n), &values[size_t(i) * n]))
+        fail(at, "a point's value is missing from the Draco attribute; the file is damaged: re-export it");
+    }
     const uint64_t v = out.add_view(doc, {reinterpret_cast<const uint8_t*>(values.data()), values.size() * 4}, at);
     primitive["attributes"][semantic] = add_accessor(doc, like, v, points, 5126);
   }

@@ -40,7 +40,10 @@ void decode_filter(const std::string& filter, uint8_t* dst, uint64_t count, uint
 // Decodes one compressed view onto the end of the writer's chunk and returns where it starts.
 uint64_t decode_view(const Json& ext, GlbWriter& out, const std::string& where) {
   const uint64_t stride = whole(ext, "byteStride", 0, where, true), count = whole(ext, "count", 0, where, true);
-  const std::string mode = ext.value("mode", std::string()), filter = ext.value("filter", std::string("NONE"));
+  const auto text = [&ext](const char* key, const char* fallback) {
+    return ext.contains(key) && ext[key].is_string() ? ext[key].get<std::string>() : std::string(fallback);
+  };
+  const std::string mode = text("mode", ""), filter = text("filter", "NONE");
   const std::span<const uint8_t> src = out.view_bytes(ext, where);
   if (stride == 0 || stride > 256 || count > (uint64_t(4) << 30) / stride) fail(where, "byteStride or count out of range");
   // The source lies in the same chunk: copied first, as appending may move it.

@@ -163,10 +163,15 @@ tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& ba
   // are decoded first; the rest reads the equivalent uncompressed GLB.
   std::vector<uint8_t> decoded;
   for (auto decode : {decode_meshopt_compression, decode_draco_compression}) {
-    if (std::vector<uint8_t> d = decode(bytes, glb, name, base_dir); !d.empty()) {
-      decoded = std::move(d);
-      bytes = decoded;
-      glb = true;
+    try {
+      if (std::vector<uint8_t> d = decode(bytes, glb, name, base_dir); !d.empty()) {
+        decoded = std::move(d);
+        bytes = decoded;
+        glb = true;
+      }
+    } catch (const nlohmann::json::exception& e) {  // a value of the wrong JSON type
+      fail(name, std::string("a compressed view or primitive has a field of the wrong type (") + e.what() +
+                     "); the file does not follow the glTF schema: re-export it");
     }
   }
   check_required_extensions(bytes, glb, name);

@@ -11,7 +11,8 @@
 namespace cellwalk {
 
 // Events use GLFW's codes (GLFW_KEY_W, GLFW_PRESS, GLFW_MOUSE_BUTTON_LEFT, ...); include
-// <GLFW/glfw3.h> to name them. Callbacks run inside poll_events() on the window's thread.
+// <GLFW/glfw3.h> to name them. Callbacks run inside poll_events() on the window's thread; an
+// exception one throws is rethrown by poll_events() (the events after it in that poll are dropped).
 struct WindowCallbacks {
   std::function<void(int key, int action, int mods)> key;
   std::function<void(int button, int action, int mods)> mouse_button;

@@ -11,7 +11,7 @@
 namespace cellwalk {
 
 struct ViewerOptions {
-  std::string strategy = "brute";
+  std::vector<std::string> strategies = {"brute"};  // the first is shown first; Tab cycles
   int width = 1024, height = 768;
   float fov_y_deg = 60.0f;
   std::string record_file;      // if set, records from the first frame to here (R toggles);
@@ -43,7 +43,7 @@ struct ViewerSummary {
 // B bird's-eye view (what the walker is shown, seen from above, each object no finer than
 // a pixel's error from up there needs when the strategy serves every level, the chosen set's
 // boxes in yellow over every object's box, with the walker's frustum and, for stratified, its
-// viewcell and bounding box), R starts/stops recording, P saves a screenshot, H shows the keys,
+// viewcell and bounding box), R starts/stops recording, P saves a screenshot, H shows the keys, Tab the next strategy,
 // 1-5 switch stratified's show styles (full, near, far objects, far texture, brute), Esc quits.
 // Walking keeps the eye at eye height over the floor under it (FloorProbe; steps up to half
 // an eye height are climbed); the statistics wrap inside the window on a dark panel.
