@@ -104,9 +104,10 @@ void decode_primitive(Json& doc, Json& primitive, GlbWriter& out, const std::str
     if (!primitive["attributes"].contains(semantic)) fail(at, "is compressed but the primitive has no accessor for it");
     const Json& like = accessor_at(doc, primitive["attributes"][semantic], at);
     const int n = components_of(like);
-    if (n == 0 || n != attribute->num_components())
-      fail(at, "the accessor's type has " + std::to_string(n) + " components and the Draco attribute " +
-                   std::to_string(attribute->num_components()));
+    if (n == 0) fail(at, "the accessor's type is not SCALAR, VEC2, VEC3 or VEC4; the file breaks the glTF schema: re-export it");
+    if (n != attribute->num_components())
+      fail(at, "the accessor has " + std::to_string(n) + " components but the Draco attribute " +
+                   std::to_string(attribute->num_components()) + "; the file is inconsistent: re-export it");
     std::vector<float> values(points * n);
     for (uint32_t i = 0; i < points; ++i) {
       const draco::AttributeValueIndex value = attribute->mapped_index(draco::PointIndex(i));
