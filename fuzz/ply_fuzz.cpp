@@ -8,7 +8,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
-    cellwalk::parse_model(cellwalk::ModelFormat::kPly, {data, size}, "fuzz.ply");
+    cellwalk::parse_model(cellwalk::ModelFormat::kPly, {data, size}, "fuzz.ply").objects;
   } catch (const cellwalk::Error&) {
   }
   return 0;

@@ -16,7 +16,7 @@ namespace {
 
 const Mesh& bunny() {
   static const Mesh mesh =
-      import_model(std::string(CELLWALK_SOURCE_DIR) + "/data/cgal/meshes/bunny00.off").at(0).mesh;
+      import_model(std::string(CELLWALK_SOURCE_DIR) + "/data/cgal/meshes/bunny00.off").objects.at(0).mesh;
   return mesh;
 }
 

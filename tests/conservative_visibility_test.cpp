@@ -389,7 +389,7 @@ TEST(BackfaceTest, BoxFacesSeenFromACellBeside) {
 
 // Hierarchical = exact per triangle, and sound against sampled viewpoints.
 TEST(BackfaceTest, HierarchyMatchesPerTriangleOnBunny) {
-  Mesh bunny = import_model(test::cgal_mesh("bunny00.off"))[0].mesh;
+  Mesh bunny = import_model(test::cgal_mesh("bunny00.off")).objects[0].mesh;
   const Aabb b = bounds_of(bunny);
   const Vec3 s = b.size();
   const Aabb cell{b.max + s * 0.3f, b.max + s * 0.5f};
@@ -679,7 +679,7 @@ std::vector<Object> random_world(uint64_t seed, const Mesh& bunny, bool two_side
 }
 
 Mesh small_bunny() {
-  Mesh m = import_model(test::cgal_mesh("bunny00.off"))[0].mesh;
+  Mesh m = import_model(test::cgal_mesh("bunny00.off")).objects[0].mesh;
   const Aabb b = bounds_of(m);
   const float scale = 1.0f / std::max({b.size().x, b.size().y, b.size().z});
   transform(m, glm::scale(Mat4(1.0f), Vec3(scale)) *

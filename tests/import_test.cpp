@@ -44,7 +44,7 @@ OffHeader off_header(const std::string& path) {
 std::vector<uint8_t> bytes_of(const std::string& text) { return {text.begin(), text.end()}; }
 
 Object parse_one(ModelFormat format, const std::string& text) {
-  std::vector<Object> objects = parse_model(format, bytes_of(text), "test");
+  std::vector<Object> objects = parse_model(format, bytes_of(text), "test").objects;
   EXPECT_EQ(objects.size(), 1u);
   return objects.at(0);
 }
@@ -52,7 +52,7 @@ Object parse_one(ModelFormat format, const std::string& text) {
 // Parses and returns the error message, failing the test if there is none or another kind.
 std::string parse_error(ModelFormat format, const std::string& text) {
   try {
-    parse_model(format, bytes_of(text), "test");
+    parse_model(format, bytes_of(text), "test").objects;
   } catch (const Error& e) {
     return e.what();
   }
@@ -66,7 +66,7 @@ TEST(ImportOff, BunnyMatchesItsHeader) {
   const std::string path = cgal_mesh("bunny00.off");
   const OffHeader h = off_header(path);
   ASSERT_EQ(h.vertices, 37706u);  // what the file says, so a changed file is noticed
-  std::vector<Object> objects = import_model(path, 5);
+  std::vector<Object> objects = import_model(path, 5).objects;
   ASSERT_EQ(objects.size(), 1u);
   const Object& o = objects[0];
   EXPECT_EQ(o.id, 5u);
@@ -81,14 +81,14 @@ TEST(ImportOff, BunnyMatchesItsHeader) {
 TEST(ImportOff, ArmadilloMatchesItsHeader) {
   const std::string path = cgal_mesh("armadillo.off");
   const OffHeader h = off_header(path);
-  std::vector<Object> objects = import_model(path);
+  std::vector<Object> objects = import_model(path).objects;
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].mesh.vertex_count(), h.vertices);
   EXPECT_EQ(objects[0].mesh.triangle_count(), h.faces);
 }
 
 TEST(ImportOff, ColouredOffWithComments) {
-  std::vector<Object> objects = import_model(cgal_mesh("mesh_with_colors.off"));
+  std::vector<Object> objects = import_model(cgal_mesh("mesh_with_colors.off")).objects;
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].mesh.vertex_count(), 8u);
   EXPECT_EQ(objects[0].mesh.colors.size(), 8u);
@@ -110,7 +110,7 @@ TEST(ImportOff, VariantsAndPolygons) {
 // --- PLY -----------------------------------------------------------------------------------
 
 TEST(ImportPly, CgalColouredTetraKeepsNormalsAndColours) {
-  std::vector<Object> objects = import_model(cgal_mesh("colored_tetra.ply"));
+  std::vector<Object> objects = import_model(cgal_mesh("colored_tetra.ply")).objects;
   ASSERT_EQ(objects.size(), 1u);
   const Mesh& m = objects[0].mesh;
   EXPECT_EQ(m.vertex_count(), 4u);
@@ -120,7 +120,7 @@ TEST(ImportPly, CgalColouredTetraKeepsNormalsAndColours) {
 }
 
 TEST(ImportPly, CgalPointCloudHasVerticesAndNoTriangles) {
-  std::vector<Object> objects = import_model(cgal_mesh("b9.ply"));
+  std::vector<Object> objects = import_model(cgal_mesh("b9.ply")).objects;
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].mesh.vertex_count(), 22300u);  // "element vertex 22300"
   EXPECT_EQ(objects[0].mesh.triangle_count(), 0u);    // "element face 0"
@@ -128,8 +128,8 @@ TEST(ImportPly, CgalPointCloudHasVerticesAndNoTriangles) {
 
 TEST(ImportPly, AssimpAsciiAndBinaryCubesAgree) {
   // cube.ply: 8 vertices, 6 quads (uint8/int32 type names); cube_binary.ply: 12 triangles.
-  const Object ascii = import_model(assimp_model("PLY/cube.ply")).at(0);
-  const Object binary = import_model(assimp_model("PLY/cube_binary.ply")).at(0);
+  const Object ascii = import_model(assimp_model("PLY/cube.ply")).objects.at(0);
+  const Object binary = import_model(assimp_model("PLY/cube_binary.ply")).objects.at(0);
   EXPECT_EQ(ascii.mesh.vertex_count(), 8u);
   EXPECT_EQ(ascii.mesh.triangle_count(), 12u);
   EXPECT_EQ(binary.mesh.vertex_count(), 8u);
@@ -137,10 +137,10 @@ TEST(ImportPly, AssimpAsciiAndBinaryCubesAgree) {
 }
 
 TEST(ImportPly, AssimpFilesWithExtraPropertiesAndFloatColours) {
-  const Object wuson = import_model(assimp_model("PLY/Wuson.ply")).at(0);
+  const Object wuson = import_model(assimp_model("PLY/Wuson.ply")).objects.at(0);
   EXPECT_EQ(wuson.mesh.vertex_count(), 11184u);  // s t skipped, free-text header line skipped
   EXPECT_EQ(wuson.mesh.triangle_count(), 3732u);
-  const Object colored = import_model(assimp_model("PLY/float-color.ply")).at(0);
+  const Object colored = import_model(assimp_model("PLY/float-color.ply")).objects.at(0);
   ASSERT_EQ(colored.mesh.colors.size(), 3u);
 }
 
@@ -148,7 +148,7 @@ TEST(ImportPly, TruncatedBinaryNamesTheByteOffset) {
   // assimp's pond.0.ply declares 70051 vertices of 31 bytes but holds 69 bytes less.
   const std::string path = assimp_model("PLY/pond.0.ply");
   try {
-    import_model(path);
+    import_model(path).objects;
     FAIL() << "truncated file accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(path + "@"), std::string::npos) << e.what();
@@ -183,14 +183,14 @@ TEST(ImportPly, BigEndianMatchesAscii) {
 // --- OBJ -----------------------------------------------------------------------------------
 
 TEST(ImportObj, AssimpModels) {
-  const Object box = import_model(assimp_model("OBJ/box.obj")).at(0);
+  const Object box = import_model(assimp_model("OBJ/box.obj")).objects.at(0);
   EXPECT_EQ(box.mesh.vertex_count(), 8u);
   EXPECT_EQ(box.mesh.triangle_count(), 12u);  // 6 quads
-  const Object colored = import_model(assimp_model("OBJ/cube_with_vertexcolors.obj")).at(0);
+  const Object colored = import_model(assimp_model("OBJ/cube_with_vertexcolors.obj")).objects.at(0);
   EXPECT_EQ(colored.mesh.colors.size(), 8u);
   EXPECT_EQ(colored.mesh.triangle_count(), 12u);
   size_t spider_triangles = 0;
-  const std::vector<Object> spider = import_model(assimp_model("OBJ/spider.obj"));  // many groups
+  const std::vector<Object> spider = import_model(assimp_model("OBJ/spider.obj")).objects;  // many groups
   for (const Object& part : spider) spider_triangles += part.mesh.triangle_count();
   EXPECT_GT(spider_triangles, 1000u);
   EXPECT_GT(spider.size(), 10u);
@@ -237,7 +237,7 @@ GltfCounts glb_oracle(const std::string& path) {
 TEST(ImportGltf, CylinderEngineGivesOneObjectPerPrimitive) {
   const std::string path = assimp_model("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb");
   const GltfCounts expected = glb_oracle(path);
-  std::vector<Object> objects = import_model(path, 100);
+  std::vector<Object> objects = import_model(path, 100).objects;
   ASSERT_GT(objects.size(), 10u);
   EXPECT_EQ(objects.size(), expected.objects);
   size_t triangles = 0;
@@ -253,7 +253,7 @@ TEST(ImportGltf, CylinderEngineGivesOneObjectPerPrimitive) {
 
 TEST(ImportGltf, ExternalBinIsReadFromFilesNotFromMemory) {
   const std::string path = assimp_model("glTF2/BoxTextured-glTF/BoxTextured.gltf");
-  std::vector<Object> objects = import_model(path);
+  std::vector<Object> objects = import_model(path).objects;
   ASSERT_EQ(objects.size(), 1u);
   EXPECT_EQ(objects[0].mesh.triangle_count(), 12u);
   // The same JSON from memory must not reach for BoxTextured0.bin on disk.
@@ -268,7 +268,7 @@ TEST(ImportGltf, AssimpBrokenSamplesGiveErrors) {
                            "glTF2/BoxWithInfinites-glTF-Binary/BoxWithInfinites.glb",
                            "glTF2/MissingBin/BoxTextured.gltf"}) {
     const std::string path = assimp_model(name);
-    EXPECT_THROW(import_model(path), Error) << path;
+    EXPECT_THROW(import_model(path).objects, Error) << path;
   }
 }
 
@@ -283,7 +283,7 @@ void expect_same_geometry(const Object& a, const Object& b) {
 }
 
 TEST(Export, BunnyRoundTripsThroughObjGltfAndGlb) {
-  const Object bunny = import_model(cgal_mesh("bunny00.off")).at(0);
+  const Object bunny = import_model(cgal_mesh("bunny00.off")).objects.at(0);
   TempDir dir;
   for (const char* name : {"bunny.obj", "bunny.gltf", "bunny.glb"}) {
     const std::string path = dir.file(name);
@@ -296,7 +296,7 @@ TEST(Export, BunnyRoundTripsThroughObjGltfAndGlb) {
       w.add(bunny);
       w.finish();
     }
-    std::vector<Object> back = import_model(path);
+    std::vector<Object> back = import_model(path).objects;
     ASSERT_EQ(back.size(), 1u) << name;
     expect_same_geometry(bunny, back[0]);
     // OBJ keeps the "o" name, glTF the node name.
@@ -318,7 +318,7 @@ TEST(Export, SeveralObjectsKeepColoursAndOrder) {
   w.add(a);
   w.add(b);
   w.finish();
-  std::vector<Object> back = import_model(dir.file("two.glb"));
+  std::vector<Object> back = import_model(dir.file("two.glb")).objects;
   ASSERT_EQ(back.size(), 2u);
   EXPECT_EQ(back[0].name, "a");
   EXPECT_EQ(back[0].color, a.color);
@@ -345,7 +345,7 @@ TEST(ImportErrors, FormatAndFileProblems) {
   std::filesystem::create_directory(dir.file("d.obj"));
   for (const std::string& path : {dir.file("d.obj"), dir.file("missing.off")}) {
     try {
-      import_model(path);
+      import_model(path).objects;
       ADD_FAILURE() << path;
     } catch (const Error& e) {
       EXPECT_TRUE(std::string(e.what()).starts_with(path + ": ")) << e.what();
@@ -416,7 +416,7 @@ std::vector<uint8_t> triangle_glb(const std::array<float, 9>& normals, int index
 
 std::string gltf_error(const std::vector<uint8_t>& glb) {
   try {
-    parse_model(ModelFormat::kGltf, glb, "test.glb");
+    parse_model(ModelFormat::kGltf, glb, "test.glb").objects;
   } catch (const Error& e) {
     return e.what();
   }
@@ -454,7 +454,7 @@ TEST(ImportErrors, NonFiniteNormalsAreRefusedNamingTheVertex) {
   }
   // The same files with finite normals read, and keep them.
   EXPECT_EQ(parse_one(ModelFormat::kPly, binary_ply_with_normal(0.0f)).mesh.normals[2], Vec3(0, 0, 1));
-  const auto good = parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5123), "test.glb");
+  const auto good = parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5123), "test.glb").objects;
   ASSERT_EQ(good.size(), 1u);
   EXPECT_EQ(good[0].mesh.normals[1], Vec3(0, 0, 1));
 }
@@ -469,7 +469,7 @@ TEST(ImportErrors, GltfIndicesOfAFloatTypeAreRefused) {
     EXPECT_NE(gltf_error(triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, signed_type)).find("has component type " + std::to_string(signed_type)),
               std::string::npos);
   for (int unsigned_type : {5121, 5123, 5125})
-    EXPECT_EQ(parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, unsigned_type), "test.glb")
+    EXPECT_EQ(parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, unsigned_type), "test.glb").objects
                   .at(0).mesh.indices,
               (std::vector<uint32_t>{0, 1, 2}));
 }
@@ -479,7 +479,7 @@ TEST(ImportErrors, GltfIndicesOfAFloatTypeAreRefused) {
 // triangle past the coordinate bound is refused like a vertex written there.
 TEST(ImportGltf, NodeTransformsKeepNormalsFiniteAndPositionsBounded) {
   const std::array<float, 9> up = {0, 0, 1, 0, 0, 1, 0, 0, 1};
-  const auto hidden = parse_model(ModelFormat::kGltf, triangle_glb(up, 5123, {{"mesh", 0}, {"scale", {0, 0, 0}}}), "test.glb");
+  const auto hidden = parse_model(ModelFormat::kGltf, triangle_glb(up, 5123, {{"mesh", 0}, {"scale", {0, 0, 0}}}), "test.glb").objects;
   ASSERT_EQ(hidden.size(), 1u);
   for (const Vec3& n : hidden[0].mesh.normals) EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z));
   const std::string message = gltf_error(triangle_glb(up, 5123, {{"mesh", 0}, {"scale", {1e8, 1, 1}}}));
@@ -508,7 +508,7 @@ TEST(ImportErrors, EveryBrokenFileGivesAnErrorNamingIt) {
     const std::string path = entry.path().string();
     ++files;
     try {
-      import_model(path);
+      import_model(path).objects;
       ADD_FAILURE() << path << " was accepted";
     } catch (const Error& e) {
       const std::string message = e.what();
@@ -532,7 +532,7 @@ TEST(ImportObj, EveryGroupIsAnObject) {
     text += "v " + std::to_string(g) + " 0 0\nv " + std::to_string(g) + " 1 0\nv " + std::to_string(g) + " 0 1\nf -3 -2 -1\n";
   }
   text += "g part3\nf 1 2 3\ng\no Named\ng sub\nf 4 5 6\n";
-  const std::vector<Object> objects = parse_model(ModelFormat::kObj, bytes_of(text), "groups.obj", 7);
+  const std::vector<Object> objects = parse_model(ModelFormat::kObj, bytes_of(text), "groups.obj", 7).objects;
   ASSERT_EQ(objects.size(), 72u);
   for (int g = 0; g < 71; ++g) {
     EXPECT_EQ(objects[g].name, "part" + std::to_string(g));
@@ -543,7 +543,7 @@ TEST(ImportObj, EveryGroupIsAnObject) {
   EXPECT_EQ(objects[71].name, "Named/sub");
   EXPECT_EQ(objects[71].mesh.positions.front(), Vec3(1, 0, 0));
   // No group at all: one object named after the file.
-  EXPECT_EQ(parse_model(ModelFormat::kObj, bytes_of("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "dir/plain.obj").at(0).name, "plain");
+  EXPECT_EQ(parse_model(ModelFormat::kObj, bytes_of("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "dir/plain.obj").objects.at(0).name, "plain");
 }
 
 // Materials: an object's colour is its material's Kd; an object of several materials gets
@@ -553,7 +553,7 @@ TEST(ImportObj, MaterialColoursFromTheMtlFileBesideIt) {
   std::ofstream(dir.file("m.mtl")) << "newmtl red\nKd 1 0 0\n# blue\nnewmtl blue one\nKd 0 0 1.0\n";
   std::ofstream(dir.file("m.obj")) << "mtllib m.mtl missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
                                       "g a\nusemtl red\nf 1 2 3\ng b\nf 2 4 3\nusemtl blue one\nf 1 2 3\n";
-  const std::vector<Object> objects = import_model(dir.file("m.obj"));
+  const std::vector<Object> objects = import_model(dir.file("m.obj")).objects;
   ASSERT_EQ(objects.size(), 2u);
   EXPECT_EQ(objects[0].color, rgba8(255, 0, 0));
   EXPECT_TRUE(objects[0].mesh.colors.empty());
@@ -562,9 +562,9 @@ TEST(ImportObj, MaterialColoursFromTheMtlFileBesideIt) {
   EXPECT_EQ(objects[1].mesh.colors[objects[1].mesh.indices[0]], rgba8(255, 0, 0));
   EXPECT_EQ(objects[1].mesh.colors[objects[1].mesh.indices[3]], rgba8(0, 0, 255));
   // From memory, nothing beside it is read: the default colour.
-  EXPECT_EQ(parse_model(ModelFormat::kObj, test::slurp(dir.file("m.obj")), "m.obj").at(0).color, Object{}.color);
+  EXPECT_EQ(parse_model(ModelFormat::kObj, test::slurp(dir.file("m.obj")), "m.obj").objects.at(0).color, Object{}.color);
   // A real file: the spider's 19 groups, its body in HLeibTex (Kd 0.690196 0.639216 0.615686).
-  const std::vector<Object> spider = import_model(assimp_model("OBJ/spider.obj"));
+  const std::vector<Object> spider = import_model(assimp_model("OBJ/spider.obj")).objects;
   ASSERT_EQ(spider.size(), 19u);
   const auto body = std::find_if(spider.begin(), spider.end(), [](const Object& o) { return o.name == "HLeib01"; });
   ASSERT_NE(body, spider.end());
@@ -583,7 +583,7 @@ TEST(ImportGltf, EachPrimitiveIsAnObjectWithItsTransformAndColour) {
            {{"attributes", {{"POSITION", 0}}}, {"indices", 2}, {"material", 1}},
            {{"attributes", {{"POSITION", 0}}}, {"indices", 2}, {"mode", 1}}}}}}}};  // lines: skipped
   const std::vector<Object> objects =
-      parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5123, {}, patch), "two.glb");
+      parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5123, {}, patch), "two.glb").objects;
   ASSERT_EQ(objects.size(), 4u);
   EXPECT_EQ(objects[0].color, rgba8(255, 0, 0));
   EXPECT_EQ(objects[1].color, rgba8(0, 255, 0));
@@ -603,7 +603,7 @@ TEST(ImportGltf, RequiredExtensionsNotReadAreNamed) {
   // Quantized attributes are read; an extension only used, not required, is ignored.
   EXPECT_EQ(parse_model(ModelFormat::kGltf,
                         triangle_glb(up, 5123, {{"mesh", 0}}, {{"extensionsUsed", {"KHR_mesh_quantization", "EXT_x"}}, {"extensionsRequired", {"KHR_mesh_quantization"}}}),
-                        "q.glb").size(), 1u);
+                        "q.glb").objects.size(), 1u);
 }
 
 // A GLB of `mesh` as gltfpack -cc writes it: positions through the exponential filter (15-bit
@@ -661,10 +661,10 @@ std::vector<uint8_t> meshopt_glb(const Mesh& mesh, const char* extension) {
 // it gives the cow's geometry: the same triangles, positions within the 15-bit mantissa's
 // rounding, normals within the 8-bit octahedral encoding's.
 TEST(ImportGltf, MeshoptCompressedViewsDecodeToTheSameGeometry) {
-  const Object cow = import_model(cgal_mesh("cow.off")).at(0);
+  const Object cow = import_model(cgal_mesh("cow.off")).objects.at(0);
   for (const char* extension : {"EXT_meshopt_compression", "KHR_meshopt_compression"}) {
     const std::vector<uint8_t> glb = meshopt_glb(cow.mesh, extension);
-    const std::vector<Object> back = parse_model(ModelFormat::kGltf, glb, "cow.glb");
+    const std::vector<Object> back = parse_model(ModelFormat::kGltf, glb, "cow.glb").objects;
     ASSERT_EQ(back.size(), 1u) << extension;
     const Mesh& m = back[0].mesh;
     // The index codec may rotate a triangle's corners (its winding kept): compare rotated to the
@@ -743,10 +743,10 @@ std::vector<uint8_t> draco_glb(const Mesh& mesh) {
 // nearest original one (brute force) within the 14-bit quantisation, and the triangles, as
 // matched vertex triples, are the original ones; normals within the 10-bit quantisation.
 TEST(ImportGltf, DracoCompressedPrimitivesDecodeToTheSameGeometry) {
-  const Object cow = import_model(cgal_mesh("cow.off")).at(0);
+  const Object cow = import_model(cgal_mesh("cow.off")).objects.at(0);
   const Mesh& original = cow.mesh;
   const std::vector<uint8_t> glb = draco_glb(original);
-  const std::vector<Object> back = parse_model(ModelFormat::kGltf, glb, "cow.glb");
+  const std::vector<Object> back = parse_model(ModelFormat::kGltf, glb, "cow.glb").objects;
   ASSERT_EQ(back.size(), 1u);
   const Mesh& m = back[0].mesh;
   const Vec3 extent = cow.bounds.max - cow.bounds.min;
@@ -802,7 +802,7 @@ TEST(ImportGltf, DracoCompressedPrimitivesDecodeToTheSameGeometry) {
   nlohmann::json strip = nlohmann::json::parse(std::string(glb.begin() + 20, glb.begin() + bin_at - 8));
   strip["meshes"][0]["primitives"][0]["mode"] = 5;
   const std::vector<uint8_t> strip_glb = glb_of(strip, std::string(glb.begin() + bin_at, glb.end()));
-  EXPECT_EQ(parse_model(ModelFormat::kGltf, strip_glb, "strip.glb").at(0).mesh.triangle_count(), original.triangle_count());
+  EXPECT_EQ(parse_model(ModelFormat::kGltf, strip_glb, "strip.glb").objects.at(0).mesh.triangle_count(), original.triangle_count());
   // Fields of the wrong JSON type are one error naming the file, not a library's exception.
   for (const auto& [pointer, value] : {std::pair<const char*, nlohmann::json>{"/accessors/0/type", 5},
                                        {"/accessors", "none"},
@@ -820,8 +820,8 @@ TEST(ImportGltf, DracoCompressedPrimitivesDecodeToTheSameGeometry) {
 // uncompressed triangles less those with two corners at one place (Draco's encoder drops them), and
 // bounds within the stream's quantisation.
 TEST(ImportGltf, DracoSampleEngineMatchesTheUncompressedOne) {
-  const std::vector<Object> plain = import_model(assimp_model("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb"));
-  const std::vector<Object> draco = import_model(assimp_model("glTF2/draco/2CylinderEngine.gltf"));
+  const std::vector<Object> plain = import_model(assimp_model("glTF2/2CylinderEngine-glTF-Binary/2CylinderEngine.glb")).objects;
+  const std::vector<Object> draco = import_model(assimp_model("glTF2/draco/2CylinderEngine.gltf")).objects;
   ASSERT_EQ(draco.size(), plain.size());
   ASSERT_GT(plain.size(), 100u);
   size_t dropped = 0;
@@ -901,7 +901,7 @@ TEST(ImportPatches, LargeMeshIsPartitionedIntoBoundedPatches) {
 TEST(ImportCommand, PlacesModelsAsAsked) {
   TempDir dir;
   const std::string tetra = cgal_mesh("colored_tetra.ply"), cow = cgal_mesh("cow.off");
-  const Aabb t = import_model(tetra).at(0).bounds;
+  const Aabb t = import_model(tetra).objects.at(0).bounds;
   const auto bounds_after = [&](const std::string& options, size_t object) {
     const std::string scene = dir.file("p.cwscene");
     const auto r = test::run_cellwalk("import " + options + " -o " + scene);
@@ -945,7 +945,7 @@ TEST(ImportCommand, WritesASceneAndCounts) {
   EXPECT_EQ(ok.output.rfind("imported 9 objects, 75412 triangles, ", 0), 0u) << ok.output;
   EXPECT_TRUE(std::filesystem::exists(dir.file("s.cwscene")));
   size_t exported = 0;
-  for (const Object& o : import_model(dir.file("s.obj"))) exported += o.mesh.triangle_count();
+  for (const Object& o : import_model(dir.file("s.obj")).objects) exported += o.mesh.triangle_count();
   EXPECT_EQ(exported, 75412u);
 
   const auto json = test::run_cellwalk("import " + cgal_mesh("colored_tetra.ply") + " -o " +

@@ -22,7 +22,7 @@ namespace {
 // Bunnies down the -z axis from 1 to 200 of their own sizes away, alternately left and right
 // of it so that none hides the next, and one behind the eye.
 std::string write_bunny_row(const test::TempDir& dir) {
-  const Mesh bunny = import_model(test::cgal_mesh("bunny00.off")).at(0).mesh;
+  const Mesh bunny = import_model(test::cgal_mesh("bunny00.off")).objects.at(0).mesh;
   const Aabb b = bounds_of(bunny);
   const float size = glm::length(b.size());
   std::vector<Object> objects;

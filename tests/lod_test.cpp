@@ -25,7 +25,7 @@ namespace cellwalk {
 namespace {
 
 const Mesh& bunny() {
-  static const Mesh mesh = import_model(test::cgal_mesh("bunny00.off")).at(0).mesh;
+  static const Mesh mesh = import_model(test::cgal_mesh("bunny00.off")).objects.at(0).mesh;
   return mesh;
 }
 
@@ -275,7 +275,7 @@ TEST(LodChain, RecordedErrorBoundsOracleOnBunny) {
 }
 
 TEST(LodChain, RecordedErrorBoundsOracleOnArmadillo) {
-  const Mesh armadillo = import_model(test::cgal_mesh("armadillo.off")).at(0).mesh;
+  const Mesh armadillo = import_model(test::cgal_mesh("armadillo.off")).objects.at(0).mesh;
   expect_recorded_error_bounds_oracle(armadillo, build_lod_chain(armadillo));
 }
 

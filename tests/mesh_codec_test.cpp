@@ -24,7 +24,7 @@ const Mesh& stored_bunny() {
   static const Mesh mesh = [] {
     LodParams one_level;
     one_level.min_triangles = size_t(1) << 30;
-    return build_lod_chain(import_model(test::cgal_mesh("bunny00.off")).at(0).mesh, one_level)
+    return build_lod_chain(import_model(test::cgal_mesh("bunny00.off")).objects.at(0).mesh, one_level)
         .levels[0]
         .mesh;
   }();
@@ -51,6 +51,8 @@ void expect_round_trip(const Mesh& in, const CodecParams& params) {
   ASSERT_EQ(out.vertex_count(), in.vertex_count());
   EXPECT_EQ(triangles(out), triangles(in));
   EXPECT_EQ(out.colors, in.colors);
+  EXPECT_EQ(out.uvs, in.uvs);  // exact
+  EXPECT_EQ(out.texture, in.texture);
   ASSERT_EQ(out.normals.size(), in.normals.size());
   const Aabb box = bounds_of(in);
   // The documented bound: half a quantisation step per axis, plus float rounding.
@@ -103,6 +105,8 @@ Mesh random_mesh(std::mt19937& rng, size_t vertices, size_t triangles, bool attr
     compute_normals(m);
     for (Vec3& n : m.normals) n = glm::normalize(Vec3(u(rng), u(rng), u(rng)));
     for (size_t i = 0; i < vertices; ++i) m.colors.push_back(uint32_t(rng()));
+    for (size_t i = 0; i < vertices; ++i) m.uvs.emplace_back(u(rng) * 0.1f, u(rng) * 1e-4f);
+    m.texture = rng() % 3 == 0 ? kNoTexture : uint32_t(rng() % 1000);
   }
   return m;
 }
@@ -166,6 +170,8 @@ void expect_error_or_valid(const std::vector<uint8_t>& bytes) {
 TEST(MeshCodec, EveryByteFlipAndTruncation) {
   Mesh m = test::box_mesh({Vec3(0), Vec3(1)});
   m.colors.assign(m.vertex_count(), rgba8(10, 20, 30));
+  m.uvs.assign(m.vertex_count(), Vec2(0.25f, 0.75f));
+  m.texture = 2;
   for (bool zstd : {false, true}) {
     const std::vector<uint8_t> good = encode_mesh(m, {16, 8, zstd});
     for (size_t i = 0; i < good.size(); ++i) {

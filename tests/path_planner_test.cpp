@@ -112,7 +112,7 @@ void report(const char* name, const World& world, const PlannedSpace& s, const C
 
 // The Stanford bunny standing on a 6 × 6 m ground quad (its lowest point at y = 0).
 std::string bunny_on_ground(const test::TempDir& dir) {
-  std::vector<Object> objects = import_model(test::cgal_mesh("bunny00.off"));
+  std::vector<Object> objects = import_model(test::cgal_mesh("bunny00.off")).objects;
   Aabb box;
   for (const Object& o : objects) box.extend(o.bounds);
   const Vec3 shift(-box.center().x, -box.min.y, -box.center().z);
@@ -201,7 +201,7 @@ TEST(PathPlanner, BunnyOnAGroundEveryKindKeepsTheClearanceAndSeesTheBunny) {
 // the model is in view in every frame, and the two measures agree to the ray grid's resolution.
 TEST(PathPlanner, ViewCoverageAgreesWithTheRenderedImage) {
   test::TempDir dir;
-  std::vector<Object> bunny = import_model(test::cgal_mesh("bunny00.off"));
+  std::vector<Object> bunny = import_model(test::cgal_mesh("bunny00.off")).objects;
   const World world(test::write_world(dir, bunny, {}, "bunny_alone"));
   PathParams p;
   p.frames = 12;

@@ -17,7 +17,7 @@ namespace cellwalk::vdr {
 namespace {
 
 struct CowModel {
-  ProgressiveMesh pm = build_progressive_mesh(import_model(test::cgal_mesh("cow.off"))[0].mesh, {.base_triangles = 100}, "cow");
+  ProgressiveMesh pm = build_progressive_mesh(import_model(test::cgal_mesh("cow.off")).objects[0].mesh, {.base_triangles = 100}, "cow");
   VsplitDag dag = build_vsplit_dag(pm, DagKind::kMiniRedundant);
 };
 

@@ -36,7 +36,7 @@ std::vector<Tri> canonical_triangles(std::span<const uint32_t> indices) {
   return out;
 }
 
-Mesh load_cgal(const std::string& name) { return import_model(test::cgal_mesh(name))[0].mesh; }
+Mesh load_cgal(const std::string& name) { return import_model(test::cgal_mesh(name)).objects[0].mesh; }
 
 // The input's triangles as corner positions, through a map from position to the PM's vertex id.
 std::vector<Tri> input_triangles_as_pm_ids(const Mesh& input, const ProgressiveMesh& pm) {

@@ -26,7 +26,7 @@ using asio::ip::tcp;
 const VdrModel& stream_bunny() {
   static const VdrModel m = [] {
     VdrModel out;
-    out.pm = build_progressive_mesh(import_model(test::cgal_mesh("bunny00.off"))[0].mesh, {.base_triangles = 200}, "bunny");
+    out.pm = build_progressive_mesh(import_model(test::cgal_mesh("bunny00.off")).objects[0].mesh, {.base_triangles = 200}, "bunny");
     out.dag = build_vsplit_dag(out.pm, DagKind::kMiniRedundant);
     for (const Vec3& p : out.pm.positions) out.bounds.extend(p);
     return out;

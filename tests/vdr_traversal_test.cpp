@@ -21,7 +21,7 @@ namespace {
 
 VdrModel traversal_model(const char* name) {
   VdrModel m;
-  m.pm = build_progressive_mesh(import_model(test::cgal_mesh(name))[0].mesh, {.base_triangles = 200}, name);
+  m.pm = build_progressive_mesh(import_model(test::cgal_mesh(name)).objects[0].mesh, {.base_triangles = 200}, name);
   m.dag = build_vsplit_dag(m.pm, DagKind::kMiniRedundant);
   for (const Vec3& p : m.pm.positions) m.bounds.extend(p);
   return m;

@@ -90,7 +90,7 @@ TEST_F(ViewerTest, BirdsEyeViewDiffersFromTheStreetView) {
 // the demo city with brute). It now draws each chosen object no finer than its error from the
 // top camera needs, and outlines the chosen set in yellow over every object's box.
 TEST_F(ViewerTest, BirdsEyeViewDrawsTheChosenSetCoarserAndOutlined) {
-  const Mesh bunny = import_model(test::cgal_mesh("bunny00.off")).at(0).mesh;
+  const Mesh bunny = import_model(test::cgal_mesh("bunny00.off")).objects.at(0).mesh;
   const Aabb b = bounds_of(bunny);
   std::vector<Object> objects;
   for (int i = 0; i < 6; ++i) {

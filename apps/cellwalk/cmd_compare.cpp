@@ -52,6 +52,7 @@ NamedFidelity compare_one(const CompareArgs& args, const World& world, const Cam
   RenderSettings settings = args.render_settings(budget);
   fit_backdrop(settings, world.info().bounds);
   Renderer renderer(settings);
+  use_world_textures(renderer, world);
   CompareOptions options = args.options;
   options.image_dir = options.max_images > 0 ? args.out : "";
   options.label = label;

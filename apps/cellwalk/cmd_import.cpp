@@ -107,12 +107,19 @@ void run_import(const ImportOptions& opt) {
 
   SceneCounts counts;
   Aabb bounds;
-  uint64_t skipped = 0, split = 0;
+  uint64_t skipped = 0, split = 0, textures = 0;
   GridPlacer grid(opt.inputs.size());
   // One file at a time: only the model being read is in memory.
   for (const std::string& file : opt.inputs) {
-    std::vector<Object> objects = import_model(file);
+    ImportedModel model = import_model(file);
+    std::vector<Object>& objects = model.objects;
     place_model(objects, opt, grid);
+    // The model's textures are numbered from 0; in the scene they follow the earlier models'.
+    const uint32_t first_texture = uint32_t(textures);
+    for (const TextureImage& texture : model.textures) out.add_texture(texture);
+    textures += model.textures.size();
+    for (Object& o : objects)
+      if (o.mesh.texture != kNoTexture) o.mesh.texture += first_texture;
     for (Object& read : objects) {
       // A point cloud has nothing to draw; ids stay dense over the objects kept.
       if (read.mesh.triangle_count() == 0) {
@@ -143,12 +150,13 @@ void run_import(const ImportOptions& opt) {
     nlohmann::ordered_json j = {{"inputs", opt.inputs}, {"output", opt.output}, {"objects", counts.objects},
                         {"triangles", counts.triangles}, {"vertices", counts.vertices},
                         {"bytes", counts.bytes},     {"skipped_without_triangles", skipped},
-                        {"split_into_patches", split}};
+                        {"split_into_patches", split}, {"textures", textures}};
     print_json("import", j);
   } else {
     std::printf("imported %llu objects, %llu triangles, %llu bytes", static_cast<unsigned long long>(counts.objects),
                 static_cast<unsigned long long>(counts.triangles), static_cast<unsigned long long>(counts.bytes));
     if (split > 0) std::printf(" (%llu large meshes split into patches of at most %zu triangles)", static_cast<unsigned long long>(split), opt.patch_triangles);
+    if (textures > 0) std::printf(", %llu textures", static_cast<unsigned long long>(textures));
     std::printf("\n");
   }
 }

@@ -57,6 +57,7 @@ void register_render(CLI::App& root) {
     RenderSettings settings = args->lens.render_settings();
     fit_backdrop(settings, world.info().bounds);
     Renderer renderer(settings);
+    use_world_textures(renderer, world);
     FrameStats stats = render_frame(*strategy, renderer, camera);
     write_png(renderer.read_color(), args->out);
     if (args->json)

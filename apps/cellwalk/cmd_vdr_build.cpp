@@ -29,7 +29,7 @@ struct VdrBuildArgs {
 // Every object of the model in one mesh: the PM is of the whole model.
 Mesh vdr_merged_model(const std::string& file) {
   Mesh all;
-  for (const Object& o : import_model(file)) append(all, o.mesh);
+  for (const Object& o : import_model(file).objects) append(all, o.mesh);
   if (all.triangle_count() == 0) fail(file, "holds no triangle to simplify");
   return all;
 }

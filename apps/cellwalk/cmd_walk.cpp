@@ -28,6 +28,7 @@ WalkSummary walk_one(const ReplayOptions& args, const World& world, const Camera
   RenderSettings settings = args.render_settings(budget);
   fit_backdrop(settings, world.info().bounds);
   Renderer renderer(settings);
+  use_world_textures(renderer, world);
   ReplayOptions::Run run = args.make_run(given, world, budget, labels);
   const std::string& label = run.label;
   const std::unique_ptr<Strategy> strategy = std::move(run.strategy);

@@ -74,7 +74,7 @@ std::string model_path(const std::string& name) {
 
 Mesh merged(const std::string& file) {
   Mesh all;
-  for (const Object& o : import_model(file)) append(all, o.mesh);
+  for (const Object& o : import_model(file).objects) append(all, o.mesh);
   return all;
 }
 

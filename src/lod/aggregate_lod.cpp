@@ -25,6 +25,7 @@ namespace {
 Mesh compact(const Mesh& mesh, const std::vector<uint32_t>& indices) {
   std::vector<uint32_t> remap(mesh.positions.size(), UINT32_MAX);
   Mesh out;
+  out.texture = mesh.texture;
   out.indices.reserve(indices.size());
   for (uint32_t v : indices) {
     if (remap[v] == UINT32_MAX) {
@@ -32,6 +33,7 @@ Mesh compact(const Mesh& mesh, const std::vector<uint32_t>& indices) {
       out.positions.push_back(mesh.positions[v]);
       if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[v]);
       if (!mesh.colors.empty()) out.colors.push_back(mesh.colors[v]);
+      if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[v]);
     }
     out.indices.push_back(remap[v]);
   }

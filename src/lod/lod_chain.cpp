@@ -136,6 +136,8 @@ BuiltLevel optimised_level(const Mesh& source, const std::vector<uint32_t>& sour
   remap_stream(source.positions, level.mesh.positions);
   remap_stream(source.normals, level.mesh.normals);
   remap_stream(source.colors, level.mesh.colors);
+  remap_stream(source.uvs, level.mesh.uvs);
+  level.mesh.texture = source.texture;
   remap_stream(source_ids, level.original_ids);
   return level;
 }

@@ -15,10 +15,16 @@ namespace {
 constexpr uint32_t kPositionBytes = 12;
 constexpr uint32_t kNormalBytes = 4;
 constexpr uint32_t kColorBytes = 4;
+constexpr uint32_t kUvBytes = 8;
 
-uint32_t stride_for(const Mesh& mesh) {
+// Uvs are uploaded only for a mesh that samples a texture: the others would never read them.
+bool textured(const Mesh& mesh) { return mesh.texture != kNoTexture; }
+
+uint32_t uv_offset_for(const Mesh& mesh) {
   return kPositionBytes + kNormalBytes + (mesh.colors.empty() ? 0 : kColorBytes);
 }
+
+uint32_t stride_for(const Mesh& mesh) { return uv_offset_for(mesh) + (textured(mesh) ? kUvBytes : 0); }
 
 uint32_t snorm10(float v) {
   return uint32_t(int32_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 511.0f))) & 0x3FFu;
@@ -37,6 +43,7 @@ void interleave(const Mesh& mesh, const std::vector<Vec3>& normals, uint32_t str
     if (!mesh.colors.empty()) {
       std::memcpy(out + kPositionBytes + kNormalBytes, &mesh.colors[i], kColorBytes);
     }
+    if (textured(mesh)) std::memcpy(out + uv_offset_for(mesh), &mesh.uvs[i], kUvBytes);
   }
 }
 
@@ -51,6 +58,8 @@ GpuMesh::GpuMesh(const Mesh& mesh)
     : bytes_(bytes_for(mesh)),
       stride_(stride_for(mesh)),
       has_colors_(!mesh.colors.empty()),
+      texture_(mesh.texture),
+      uv_offset_(uv_offset_for(mesh)),
       index_offset_(uint64_t(stride_) * mesh.positions.size()),
       index_count_(uint32_t(mesh.indices.size())) {
   // Meshes without normals get smooth ones so they are lit like the rest.
@@ -85,6 +94,8 @@ GpuMesh::GpuMesh(GpuMesh&& other) noexcept
       bytes_(other.bytes_),
       stride_(other.stride_),
       has_colors_(other.has_colors_),
+      texture_(other.texture_),
+      uv_offset_(other.uv_offset_),
       index_offset_(other.index_offset_),
       index_count_(other.index_count_) {}
 
@@ -117,6 +128,11 @@ void GpuMeshCache::make_room(uint64_t bytes) {
     glFinish();  // queued draws release the evicted buffers' storage
     gpu_finished();
   }
+}
+
+void GpuMeshCache::set_budget(uint64_t bytes) {
+  budget_ = bytes;
+  while (resident_bytes_ > budget_ && !entries_.empty()) evict_least_recent();
 }
 
 void GpuMeshCache::evict_least_recent() {

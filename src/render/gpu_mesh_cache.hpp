@@ -14,7 +14,8 @@
 namespace cellwalk::render {
 
 // One mesh in one GL buffer: interleaved vertices (position float3, normal packed
-// 2_10_10_10 snorm, then colour RGBA8 only when the mesh has colours), then 32-bit indices.
+// 2_10_10_10 snorm, then colour RGBA8 only when the mesh has colours, then uv float2 only when
+// it samples a texture), then 32-bit indices.
 // REQUIRES: a current GL context for the lifetime of the object.
 class GpuMesh {
  public:
@@ -32,6 +33,9 @@ class GpuMesh {
   uint64_t bytes() const { return bytes_; }
   uint32_t stride() const { return stride_; }
   bool has_colors() const { return has_colors_; }
+  // The texture the mesh samples (kNoTexture: none), and its uvs' offset in each vertex.
+  uint32_t texture() const { return texture_; }
+  uint32_t uv_offset() const { return uv_offset_; }
   uint64_t index_offset() const { return index_offset_; }
   uint32_t index_count() const { return index_count_; }
 
@@ -40,6 +44,8 @@ class GpuMesh {
   uint64_t bytes_ = 0;
   uint32_t stride_ = 0;
   bool has_colors_ = false;
+  uint32_t texture_ = kNoTexture;
+  uint32_t uv_offset_ = 0;
   uint64_t index_offset_ = 0;
   uint32_t index_count_ = 0;
 };
@@ -82,6 +88,9 @@ class GpuMeshCache {
   void gpu_finished() { retired_bytes_ = 0; }
 
   uint64_t budget() const { return budget_; }
+  // A new budget; a smaller one evicts least recently used meshes until they fit.
+  // REQUIRES: the GPU has finished (no retired storage).
+  void set_budget(uint64_t bytes);
   uint64_t resident_bytes() const { return resident_bytes_; }
   // Resident plus retired: the memory the cache's buffers take now.
   uint64_t held_bytes() const { return resident_bytes_ + retired_bytes_; }

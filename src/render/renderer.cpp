@@ -17,6 +17,7 @@
 #include "cellwalk/core/error.hpp"
 #include "render/far_face_textures.hpp"
 #include "render/gpu_mesh_cache.hpp"
+#include "render/mesh_textures.hpp"
 #include "render/shaders.hpp"
 #include "render/text_overlay.hpp"
 
@@ -238,7 +239,23 @@ struct Renderer::Impl {
     glUseProgram(program);
   }
 
-  void draw(const render::GpuMesh& mesh, const DrawItem& item) {
+  // Texture unit 0 and the uv attribute for a mesh that samples a texture the source gives;
+  // otherwise the mesh is drawn in its colours alone.
+  void bind_texture(const render::GpuMesh& mesh, RenderStats& stats) {
+    const GLuint texture =
+        mesh.texture() != kNoTexture && textures ? textures->get(mesh.texture(), texture_source, stats.uploaded_bytes) : 0;
+    glProgramUniform1i(program, render::kTexturedUniform, texture != 0);
+    if (texture == 0) {
+      glDisableVertexArrayAttrib(vao, render::kUvAttribute);
+      return;
+    }
+    glBindTextureUnit(0, texture);
+    glVertexArrayAttribFormat(vao, render::kUvAttribute, 2, GL_FLOAT, GL_FALSE, mesh.uv_offset());
+    glVertexArrayAttribBinding(vao, render::kUvAttribute, 0);
+    glEnableVertexArrayAttrib(vao, render::kUvAttribute);
+  }
+
+  void draw(const render::GpuMesh& mesh, const DrawItem& item, RenderStats& stats) {
     glVertexArrayVertexBuffer(vao, 0, mesh.buffer(), 0, GLsizei(mesh.stride()));
     glVertexArrayElementBuffer(vao, mesh.buffer());
     if (mesh.has_colors()) {
@@ -249,6 +266,7 @@ struct Renderer::Impl {
       glVertexAttrib4Nub(render::kColorAttribute, item.color & 0xFF, item.color >> 8 & 0xFF,
                          item.color >> 16 & 0xFF, item.color >> 24);
     }
+    bind_texture(mesh, stats);
     glProgramUniform1ui(program, render::kObjectIdUniform, pixel_id(item));
     for (uint32_t first = 0; first < mesh.index_count();) {
       const uint32_t count = std::min(mesh.index_count() - first, 3 * (kDriverBatchTriangles - queued_triangles));
@@ -274,7 +292,7 @@ struct Renderer::Impl {
     const render::GpuMesh* resident = item.transient ? nullptr : cache.find(key);
     if (resident != nullptr) {
       ++stats.gpu_hits;
-      draw(*resident, item);
+      draw(*resident, item, stats);
       stats.triangles += resident->index_count() / 3;
       return true;
     }
@@ -285,10 +303,10 @@ struct Renderer::Impl {
     stats.uploaded_bytes += bytes;
     stats.triangles += mesh->triangle_count();
     if (!item.transient && bytes <= cache.budget()) {
-      draw(*cache.insert(key, *mesh), item);
+      draw(*cache.insert(key, *mesh), item, stats);
     } else {
       cache.make_room(bytes);
-      draw(render::GpuMesh(*mesh), item);  // transient: deleted after the draw is queued
+      draw(render::GpuMesh(*mesh), item, stats);  // transient: deleted after the draw is queued
       cache.retire(bytes);
     }
     return true;
@@ -333,6 +351,8 @@ struct Renderer::Impl {
   RenderSettings settings;
   render::GpuMeshCache cache;
   render::FarFaceTextures far_textures;
+  std::unique_ptr<render::MeshTextures> textures;  // once a texture source is set
+  TextureSource texture_source;
   GLuint color = 0, ids = 0, depth = 0, framebuffer = 0;
   GLuint program = 0, vao = 0;
   GLuint overlay_program = 0, overlay_vao = 0, overlay_buffer = 0;
@@ -369,10 +389,22 @@ RenderStats Renderer::render(const Camera& camera, std::span<const DrawItem> ite
     previous = item;
   }
   impl_->finish();
-  stats.gpu_resident_bytes = impl_->cache.resident_bytes() + impl_->far_textures.resident_bytes();
+  stats.gpu_resident_bytes = impl_->cache.resident_bytes() + impl_->far_textures.resident_bytes() +
+                             (impl_->textures ? impl_->textures->resident_bytes() : 0);
   stats.ms =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   return stats;
+}
+
+void Renderer::set_texture_source(TextureSource source) {
+  Impl& impl = *impl_;
+  const RenderSettings& s = impl.settings;
+  const uint64_t share = std::min(s.max_texture_budget_bytes,
+                                  uint64_t(double(s.gpu_budget_bytes) * std::clamp(s.texture_share, 0.0, 1.0)));
+  impl.textures = std::make_unique<render::MeshTextures>(share);
+  impl.cache.set_budget(s.gpu_budget_bytes - share);
+  impl.finish();  // the evicted meshes' storage is freed before the next frame
+  impl.texture_source = std::move(source);
 }
 
 void Renderer::draw_lines(const Camera& camera, std::span<const LineSegment> segments) {

@@ -10,32 +10,40 @@ namespace cellwalk::render {
 constexpr unsigned kPositionAttribute = 0;
 constexpr unsigned kNormalAttribute = 1;
 constexpr unsigned kColorAttribute = 2;
+constexpr unsigned kUvAttribute = 3;
 constexpr int kViewProjectionUniform = 0;
 constexpr int kObjectIdUniform = 1;
 constexpr int kEyePositionUniform = 2;
+constexpr int kTexturedUniform = 3;  // 1: the base colour is the colour times texture unit 0
 
 constexpr const char* kMeshVertexShader = R"(#version 450 core
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec4 a_color;
+layout(location = 3) in vec2 a_uv;
 layout(location = 0) uniform mat4 u_view_projection;
 out vec3 v_position;
 out vec3 v_normal;
 out vec4 v_color;
+out vec2 v_uv;
 void main() {
   gl_Position = u_view_projection * vec4(a_position, 1.0);
   v_position = a_position;
   v_normal = a_normal;
   v_color = a_color;
+  v_uv = a_uv;
 }
 )";
 
 constexpr const char* kMeshFragmentShader = R"(#version 450 core
 layout(location = 1) uniform uint u_object_id;  // object id + 1; 0 is the background
 layout(location = 2) uniform vec3 u_eye_position;
+layout(location = 3) uniform int u_textured;
+layout(binding = 0) uniform sampler2D u_texture;
 in vec3 v_position;
 in vec3 v_normal;
 in vec4 v_color;
+in vec2 v_uv;
 layout(location = 0) out vec4 o_color;
 layout(location = 1) out uint o_id;
 const vec3 kLightDirection = normalize(vec3(0.4, 1.0, 0.3));  // towards the light, world space
@@ -45,7 +53,9 @@ void main() {
   vec3 n = length_squared > 0.0 ? v_normal * inversesqrt(length_squared) : vec3(0.0);
   if (dot(n, u_eye_position - v_position) < 0.0) n = -n;
   float light = kAmbient + (1.0 - kAmbient) * max(dot(n, kLightDirection), 0.0);
-  o_color = vec4(v_color.rgb * light, 1.0);
+  vec3 base = v_color.rgb;
+  if (u_textured != 0) base *= texture(u_texture, v_uv).rgb;
+  o_color = vec4(base * light, 1.0);
   o_id = u_object_id;
 }
 )";

@@ -192,6 +192,7 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
   if (budget.total_bytes > 0) settings.gpu_budget_bytes = budget.gpu_bytes;
   fit_backdrop(settings, scene.info().bounds);
   auto renderer = std::make_unique<Renderer>(settings);
+  use_world_textures(*renderer, scene);
 
   ViewerState s;
   s.birds_eye = options.birds_eye;
@@ -259,6 +260,7 @@ ViewerSummary run_viewer(const World& scene, const ViewerOptions& options) {
     settings.width = w;
     settings.height = h;
     renderer = std::make_unique<Renderer>(settings);
+    use_world_textures(*renderer, scene);
     s.camera.aspect = float(w) / float(h);
   };
   window.set_callbacks(callbacks);

@@ -274,7 +274,7 @@ struct Model {
 Model landmark_model(const CityParams& p) {
   const std::string file =
       p.landmark_mesh.empty() ? data_path("cgal/meshes/bunny00.off") : p.landmark_mesh;
-  Mesh unit = shapes::unit_model(import_model(file), file);
+  Mesh unit = shapes::unit_model(import_model(file).objects, file);
   const Aabb bounds = bounds_of(unit);
   return {std::move(unit), bounds};
 }

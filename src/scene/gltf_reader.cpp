@@ -1,6 +1,8 @@
 // glTF 2.0 / GLB reader on tinygltf (syoyo/tinygltf): one object per triangle primitive of each
 // mesh node of the default scene, with the node hierarchy's transforms applied and the
-// primitive's material's base colour. tinygltf parses the JSON and resolves
+// primitive's material's base colour and base-colour texture (baseColorTexture with its
+// TEXCOORD_n; the sampler's wrap modes and KHR_texture_transform are not read: textures
+// repeat). tinygltf parses the JSON and resolves
 // buffers; everything it does not check is checked here: the GLB framing, that accessors lie
 // inside their buffer views and views inside their buffers, index ranges, node cycles.
 // Triangle primitives (lists, strips, fans) are read; points and lines are skipped.
@@ -11,7 +13,10 @@
 #include <tiny_gltf.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
+#include <map>
+#include <optional>
 #include <filesystem>
 #include <string_view>
 #include <glm/gtc/matrix_transform.hpp>
@@ -143,9 +148,11 @@ tinygltf::FsCallbacks file_callbacks(FileAccess& access) {
   return fs;
 }
 
-// Images are not needed: accept them without decoding.
-bool ignore_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
-                  const unsigned char*, int, void*) {
+// Images are kept as their file's bytes (PNG, JPEG), not decoded: scenes store textures
+// compressed (scene/texture.hpp). tinygltf hands over the bytes of a buffer view or data URI.
+bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+  image->image.assign(bytes, bytes + size);
   return true;
 }
 
@@ -179,7 +186,7 @@ tinygltf::Model load(Bytes bytes, const std::string& name, const std::string& ba
                                      : std::filesystem::path(base_dir).lexically_normal()};
   tinygltf::TinyGLTF loader;
   loader.SetFsCallbacks(file_callbacks(access));
-  loader.SetImageLoader(ignore_image, nullptr);
+  loader.SetImageLoader(keep_image_bytes, nullptr);
   tinygltf::Model model;
   std::string err, warn;
   bool ok = false;
@@ -295,6 +302,18 @@ int attribute(const tinygltf::Primitive& p, const char* name) {
   return it == p.attributes.end() ? -1 : it->second;
 }
 
+// TEXCOORD_<set> as uvs (floats, or normalised bytes/shorts as KHR_mesh_quantization allows).
+void read_uvs(const tinygltf::Model& m, const tinygltf::Primitive& p, int set, size_t vertex_count,
+              const std::string& where, Mesh& mesh) {
+  const std::string name = "TEXCOORD_" + std::to_string(set);
+  const int index = attribute(p, name.c_str());
+  if (index < 0) return;
+  const AccessorView uv = view_of(m, index, where);
+  if (uv.components != 2 || uv.count != vertex_count) fail(where, name + " does not match POSITION");
+  mesh.uvs.resize(uv.count);
+  for (size_t i = 0; i < uv.count; ++i) mesh.uvs[i] = Vec2(float(uv.get(i, 0)), float(uv.get(i, 1)));
+}
+
 Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
                     const std::string& where) {
   Mesh mesh;
@@ -346,6 +365,57 @@ Mesh read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& p,
   return mesh;
 }
 
+// The model's base-colour textures: the images some material's baseColorTexture shows, each
+// once, numbered in the order materials name them.
+struct TextureTable {
+  std::vector<uint32_t> of_material;  // texture per material, kNoTexture for none
+  std::vector<int> texcoord_of_material;
+  std::vector<TextureImage> textures;
+};
+
+// The encoded bytes of image `i`: held by tinygltf (a buffer view or data URI) or a file
+// beside the model; nullopt (with a note) when they cannot be had.
+std::optional<TextureImage> image_bytes(const tinygltf::Model& m, int i, const std::string& name,
+                                        const std::string& base_dir) {
+  const tinygltf::Image& image = m.images[i];
+  const std::string label = !image.name.empty() ? image.name : !image.uri.empty() ? image.uri : "image " + std::to_string(i);
+  if (!image.image.empty()) {
+    TextureImage t{label, {image.image.begin(), image.image.end()}};
+    try {
+      check_texture(t.encoded, name + ": " + label);
+      return t;
+    } catch (const Error& e) {
+      std::fprintf(stderr, "note: %s; its meshes are drawn untextured\n", e.what());
+      return std::nullopt;
+    }
+  }
+  if (image.uri.empty() || image.uri.starts_with("data:")) return std::nullopt;
+  return read_texture_file(image.uri, base_dir, name);
+}
+
+TextureTable texture_table(const tinygltf::Model& m, const std::string& name, const std::string& base_dir) {
+  TextureTable table;
+  table.of_material.assign(m.materials.size(), kNoTexture);
+  table.texcoord_of_material.assign(m.materials.size(), 0);
+  std::map<int, uint32_t> texture_of_image;
+  for (size_t k = 0; k < m.materials.size(); ++k) {
+    const tinygltf::TextureInfo& info = m.materials[k].pbrMetallicRoughness.baseColorTexture;
+    if (info.index < 0 || size_t(info.index) >= m.textures.size()) continue;
+    const int image = m.textures[info.index].source;
+    if (image < 0 || size_t(image) >= m.images.size()) continue;
+    auto [it, added] = texture_of_image.emplace(image, kNoTexture);
+    if (added) {
+      if (std::optional<TextureImage> t = image_bytes(m, image, name, base_dir)) {
+        it->second = uint32_t(table.textures.size());
+        table.textures.push_back(std::move(*t));
+      }
+    }
+    table.of_material[k] = it->second;
+    table.texcoord_of_material[k] = info.texCoord;
+  }
+  return table;
+}
+
 // The primitive's material's base colour factor; the default colour without one.
 Rgba8 material_color(const tinygltf::Model& m, const tinygltf::Primitive& p) {
   if (p.material < 0 || static_cast<size_t>(p.material) >= m.materials.size()) return Object{}.color;
@@ -385,7 +455,7 @@ std::string stem_of(const std::string& name) { return std::filesystem::path(name
 // One object per triangle primitive of the node's mesh (each primitive has its own material,
 // and objects are what culling and LOD work on), unfinished, transformed to world space.
 std::vector<Object> objects_of_node(const tinygltf::Model& m, int node_index, const Mat4& world,
-                                    const std::string& name) {
+                                    const std::string& name, const TextureTable& textures) {
   const tinygltf::Node& node = m.nodes[node_index];
   const std::string where = name + ": node " + std::to_string(node_index);
   if (static_cast<size_t>(node.mesh) >= m.meshes.size()) fail(where, "names a missing mesh");
@@ -401,8 +471,13 @@ std::vector<Object> objects_of_node(const tinygltf::Model& m, int node_index, co
     Object object;
     object.name = triangle_primitives > 1 ? base + "/" + std::to_string(k) : base;
     object.color = material_color(m, gm.primitives[k]);
-    object.mesh = read_primitive(m, gm.primitives[k],
-                                 where + " mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(k));
+    const tinygltf::Primitive& p = gm.primitives[k];
+    const std::string at = where + " mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(k);
+    object.mesh = read_primitive(m, p, at);
+    if (p.material >= 0 && size_t(p.material) < m.materials.size() && textures.of_material[p.material] != kNoTexture) {
+      read_uvs(m, p, textures.texcoord_of_material[p.material], object.mesh.vertex_count(), at, object.mesh);
+      if (!object.mesh.uvs.empty()) object.mesh.texture = textures.of_material[p.material];
+    }
     transform(object.mesh, world);
     keep_winding(object.mesh, world);
     objects.push_back(std::move(object));
@@ -429,9 +504,10 @@ std::vector<int> root_nodes(const tinygltf::Model& m) {
 
 }  // namespace
 
-std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
-                              const std::string& base_dir) {
+ImportedModel read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
+                        const std::string& base_dir) {
   const tinygltf::Model m = load(bytes, name, base_dir);
+  TextureTable table = texture_table(m, name, base_dir);
   std::vector<Object> objects;
   // Depth-first with an explicit stack: a deep or cyclic node graph must neither overflow the
   // call stack nor loop; each node is visited once (glTF nodes form disjoint trees).
@@ -449,7 +525,7 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
     const tinygltf::Node& node = m.nodes[index];
     const Mat4 world = parent * local_matrix(node, name + ": node " + std::to_string(index));
     if (node.mesh >= 0) {
-      for (Object& object : objects_of_node(m, index, world, name)) {
+      for (Object& object : objects_of_node(m, index, world, name, table)) {
         if (object.mesh.triangle_count() == 0) continue;
         object.id = first_id + static_cast<ObjectId>(objects.size());
         finish_object(object, name + ": node " + std::to_string(index));
@@ -458,7 +534,7 @@ std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId fir
     }
     for (auto c = node.children.rbegin(); c != node.children.rend(); ++c) stack.emplace_back(*c, world);
   }
-  return objects;
+  return {std::move(objects), std::move(table.textures)};
 }
 
 }  // namespace cellwalk::detail

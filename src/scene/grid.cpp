@@ -35,7 +35,7 @@ SceneInfo generate_grid(const GridParams& params, ObjectSink& sink) {
   if (params.nx < 1 || params.ny < 1 || params.nz < 1)
     fail("grid", "nx, ny and nz must be at least 1");
   if (params.mesh.empty()) fail("grid", "no model given (--mesh FILE)");
-  const Mesh model = shapes::unit_model(import_model(params.mesh), params.mesh);
+  const Mesh model = shapes::unit_model(import_model(params.mesh).objects, params.mesh);
   const Aabb bounds = bounds_of(model);
   const double largest = std::max({bounds.size().x, bounds.size().y, bounds.size().z});
   const double spacing = params.spacing > 0.0 ? params.spacing : 1.5 * largest;

@@ -53,6 +53,28 @@ void finish_object(Object& object, const std::string& name) {
   object.bounds = bounds_of(object.mesh);
 }
 
+std::optional<TextureImage> read_texture_file(const std::string& uri, const std::string& base_dir,
+                                              const std::string& model) {
+  if (base_dir.empty()) return std::nullopt;
+  const std::filesystem::path file = (std::filesystem::path(base_dir) / uri).lexically_normal();
+  const auto rel = file.lexically_relative(base_dir);
+  std::string problem;
+  if (rel.empty() || *rel.begin() == "..") {
+    problem = "lies outside the model's folder";
+  } else {
+    try {
+      TextureImage t{file.filename().string(), read_whole_file(file.string())};
+      check_texture(t.encoded, file.string());
+      return t;
+    } catch (const Error& e) {
+      problem = e.what();
+    }
+  }
+  std::fprintf(stderr, "note: %s: texture '%s' not read (%s); its meshes are drawn untextured\n", model.c_str(),
+               uri.c_str(), problem.c_str());
+  return std::nullopt;
+}
+
 void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon) {
   for (size_t i = 2; i < polygon.size(); ++i)
     indices.insert(indices.end(), {polygon[0], polygon[i - 1], polygon[i]});
@@ -62,18 +84,18 @@ void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygo
 
 namespace {
 
-std::vector<Object> parse(ModelFormat format, std::span<const uint8_t> bytes,
-                          const std::string& name, ObjectId first_id,
-                          const std::string& base_dir) {
+ImportedModel parse(ModelFormat format, std::span<const uint8_t> bytes, const std::string& name,
+                    ObjectId first_id, const std::string& base_dir) {
   if (bytes.empty()) fail(name, "is empty");
   if (format == ModelFormat::kGltf) {
-    std::vector<Object> objects = detail::read_gltf(bytes, name, first_id, base_dir);
-    if (objects.empty()) fail(name, "the scene has no mesh node with triangles");
-    return objects;
+    ImportedModel model = detail::read_gltf(bytes, name, first_id, base_dir);
+    if (model.objects.empty()) fail(name, "the scene has no mesh node with triangles");
+    return model;
   }
-  std::vector<Object> objects;
+  ImportedModel model;
+  std::vector<Object>& objects = model.objects;
   if (format == ModelFormat::kObj) {
-    objects = detail::read_obj(bytes, name, base_dir);
+    model = detail::read_obj(bytes, name, base_dir);
   } else {
     objects.push_back(format == ModelFormat::kOff ? detail::read_off(bytes, name) : detail::read_ply(bytes, name));
     objects.back().name = std::filesystem::path(name).stem().string();
@@ -84,7 +106,7 @@ std::vector<Object> parse(ModelFormat format, std::span<const uint8_t> bytes,
     objects[i].id = first_id + static_cast<ObjectId>(i);
     detail::finish_object(objects[i], objects.size() > 1 ? name + ": " + objects[i].name : name);
   }
-  return objects;
+  return model;
 }
 
 }  // namespace
@@ -100,15 +122,16 @@ ModelFormat format_of(const std::string& file) {
   fail(file, "unknown model format '" + ext + "'; expected .obj, .ply, .off, .gltf or .glb");
 }
 
-std::vector<Object> parse_model(ModelFormat format, std::span<const uint8_t> bytes,
-                                const std::string& name, ObjectId first_id) {
+ImportedModel parse_model(ModelFormat format, std::span<const uint8_t> bytes,
+                          const std::string& name, ObjectId first_id) {
   return parse(format, bytes, name, first_id, "");
 }
 
-std::vector<Object> import_model(const std::string& file, ObjectId first_id) {
+ImportedModel import_model(const std::string& file, ObjectId first_id) {
   const ModelFormat format = format_of(file);
   const std::vector<uint8_t> bytes = detail::read_whole_file(file);
-  // Only a .gltf beside its .bin buffers and an .obj beside its .mtl files read other files.
+  // Only a .gltf beside its .bin buffers and images and an .obj beside its .mtl files and
+  // images read other files.
   const std::string base_dir =
       format == ModelFormat::kGltf || format == ModelFormat::kObj
           ? std::filesystem::absolute(file).parent_path().lexically_normal().string()

@@ -9,7 +9,8 @@ namespace cellwalk {
 
 size_t Mesh::byte_size() const {
   return positions.size() * sizeof(Vec3) + normals.size() * sizeof(Vec3) +
-         colors.size() * sizeof(Rgba8) + indices.size() * sizeof(uint32_t);
+         colors.size() * sizeof(Rgba8) + uvs.size() * sizeof(Vec2) +
+         indices.size() * sizeof(uint32_t);
 }
 
 void validate(const Mesh& mesh, std::string_view where) {
@@ -19,6 +20,13 @@ void validate(const Mesh& mesh, std::string_view where) {
     fail(where, "normal count differs from position count");
   if (!mesh.colors.empty() && mesh.colors.size() != mesh.positions.size())
     fail(where, "colour count differs from position count");
+  if (!mesh.uvs.empty() && mesh.uvs.size() != mesh.positions.size())
+    fail(where, "texture coordinate count differs from position count");
+  if (mesh.texture != kNoTexture && mesh.uvs.empty())
+    fail(where, "samples texture " + std::to_string(mesh.texture) + " but has no texture coordinates");
+  for (size_t i = 0; i < mesh.uvs.size(); ++i)
+    if (!std::isfinite(mesh.uvs[i].x) || !std::isfinite(mesh.uvs[i].y))
+      fail(where, "vertex " + std::to_string(i) + " has a non-finite texture coordinate");
   for (size_t i = 0; i < mesh.positions.size(); ++i) check_position(mesh.positions[i], where, "vertex " + std::to_string(i));
   for (size_t i = 0; i < mesh.normals.size(); ++i) {
     const Vec3& n = mesh.normals[i];
@@ -77,12 +85,21 @@ void append(Mesh& dst, const Mesh& src) {
   const bool first = dst.positions.empty();
   const bool keep_normals = first ? !src.normals.empty() : (!dst.normals.empty() && !src.normals.empty());
   const bool keep_colors = first ? !src.colors.empty() : (!dst.colors.empty() && !src.colors.empty());
+  const bool keep_uvs = first ? !src.uvs.empty()
+                              : (!dst.uvs.empty() && !src.uvs.empty() && dst.texture == src.texture);
   const uint32_t base = static_cast<uint32_t>(dst.positions.size());
   dst.positions.insert(dst.positions.end(), src.positions.begin(), src.positions.end());
   if (keep_normals) dst.normals.insert(dst.normals.end(), src.normals.begin(), src.normals.end());
   else dst.normals.clear();
   if (keep_colors) dst.colors.insert(dst.colors.end(), src.colors.begin(), src.colors.end());
   else dst.colors.clear();
+  if (keep_uvs) {
+    dst.uvs.insert(dst.uvs.end(), src.uvs.begin(), src.uvs.end());
+    dst.texture = src.texture;
+  } else {
+    dst.uvs.clear();
+    dst.texture = kNoTexture;
+  }
   dst.indices.reserve(dst.indices.size() + src.indices.size());
   for (uint32_t i : src.indices) dst.indices.push_back(base + i);
 }

@@ -1,11 +1,15 @@
-// Wavefront OBJ reader: "v x y z [w | r g b]" and "f" with v, v/vt, v//vn or v/vt/vn
+// Wavefront OBJ reader: "v x y z [w | r g b]", "vt u v" and "f" with v, v/vt, v//vn or v/vt/vn
 // references (negative ones count back from the last vertex). Polygons become triangle fans.
 // Each o/g group becomes one object (faces of a group named again join it; "o A" then "g b"
 // names the group "A/b"), so culling and LOD work on the parts the modeller made. Materials:
-// "mtllib" files beside the model are read for "newmtl" and "Kd"; an object gets its first
-// material's Kd as its colour, and per-vertex colours when it uses several. vn and vt are
-// ignored (normals are recomputed), and so are lines, points and curves.
+// "mtllib" files beside the model are read for "newmtl", "Kd" and "map_Kd"; an object gets its
+// first material's Kd as its colour, and per-vertex colours when it uses several. A group whose
+// faces show several map_Kd textures becomes one object per texture ("group/material"), since a
+// mesh samples one texture. vn is ignored (normals are recomputed), and so are lines, points
+// and curves. vt's v runs up the image; cellwalk's uvs run down it (as glTF's), so v is flipped.
 #include <algorithm>
+#include <array>
+#include <optional>
 #include <filesystem>
 #include <map>
 #include <string>
@@ -17,26 +21,48 @@ namespace cellwalk::detail {
 namespace {
 
 constexpr uint32_t kNoMaterial = UINT32_MAX;
+constexpr uint32_t kNoUv = UINT32_MAX;
 
 struct Group {
   std::string name;
-  std::vector<uint32_t> corners;    // global position indices, three per triangle
-  std::vector<uint32_t> materials;  // one per triangle
+  std::vector<uint32_t> corners;     // global position indices, three per triangle
+  std::vector<uint32_t> uv_corners;  // global vt indices (kNoUv: none), one per corner
+  std::vector<uint32_t> materials;   // one per triangle
+};
+
+struct Material {
+  std::string name;
+  Rgba8 color = Object{}.color;
+  std::string texture_file;  // map_Kd; empty for none
 };
 
 struct ObjState {
   std::vector<Vec3> positions;
+  std::vector<Vec2> uvs;
   std::vector<Rgba8> colors;
   size_t colored = 0;  // vertices that carried "r g b"; colours are kept only if all did
-  std::vector<uint32_t> polygon;
+  std::vector<uint32_t> polygon, polygon_uvs;
   std::string object_name, group_name;
   std::vector<Group> groups;
   std::map<std::string, size_t> group_of_name;
   size_t current = SIZE_MAX;  // index into groups; SIZE_MAX: none yet
-  std::vector<Rgba8> material_colors;
+  std::vector<Material> materials;
   std::map<std::string, uint32_t> material_of_name;
   uint32_t material = kNoMaterial;
+  // Textures read so far, by map_Kd file (kNoTexture: unreadable), and the model's table.
+  std::map<std::string, uint32_t> texture_of_file;
+  std::vector<TextureImage> textures;
 };
+
+void read_uv(TextCursor& in, ObjState& s) {
+  double v[2] = {0.0, 0.0};
+  for (double& x : v) {
+    const std::string_view t = in.token_in_line();
+    if (t.empty()) break;  // "vt u" leaves v at 0
+    x = in.to_double(t, "a texture coordinate");
+  }
+  s.uvs.emplace_back(float(v[0]), float(1.0 - v[1]));
+}
 
 void read_vertex(TextCursor& in, ObjState& s) {
   double v[6];
@@ -54,15 +80,25 @@ void read_vertex(TextCursor& in, ObjState& s) {
   }
 }
 
-// The position index of one "v/vt/vn" reference, 0-based.
-uint32_t vertex_reference(TextCursor& in, std::string_view ref, size_t vertex_count) {
-  const int64_t i = in.to_int(ref.substr(0, ref.find('/')), "a vertex index");
-  const int64_t n = static_cast<int64_t>(vertex_count);
+// A 1-based (or negative, counting back) index among `count` defined so far, 0-based.
+uint32_t resolve_reference(TextCursor& in, std::string_view text, size_t count, const char* what,
+                           const char* plural) {
+  const int64_t i = in.to_int(text, (std::string("a ") + what + " index").c_str());
+  const int64_t n = static_cast<int64_t>(count);
   const int64_t resolved = i < 0 ? n + i : i - 1;
   if (i == 0 || resolved < 0 || resolved >= n)
-    in.fail("face uses vertex " + std::to_string(i) + " but " + std::to_string(n) +
-            " vertices are defined so far");
+    in.fail("face uses " + std::string(what) + " " + std::to_string(i) + " but " + std::to_string(n) + " " +
+            plural + " are defined so far");
   return static_cast<uint32_t>(resolved);
+}
+
+// The position and texture coordinate (kNoUv if absent) of one "v/vt/vn" reference, 0-based.
+std::pair<uint32_t, uint32_t> vertex_reference(TextCursor& in, std::string_view ref, const ObjState& s) {
+  const size_t slash = ref.find('/');
+  const uint32_t position = resolve_reference(in, ref.substr(0, slash), s.positions.size(), "vertex", "vertices");
+  if (slash == std::string_view::npos) return {position, kNoUv};
+  const std::string_view vt = ref.substr(slash + 1, ref.find('/', slash + 1) - slash - 1);
+  return {position, vt.empty() ? kNoUv : resolve_reference(in, vt, s.uvs.size(), "texture coordinate", "texture coordinates")};
 }
 
 // The rest of the line as one name ("g a b" names the group "a b"); `fallback` when empty.
@@ -88,16 +124,22 @@ Group& current_group(ObjState& s, const std::string& stem) {
 
 void read_face(TextCursor& in, ObjState& s, const std::string& stem) {
   s.polygon.clear();
-  for (std::string_view t = in.token_in_line(); !t.empty(); t = in.token_in_line())
-    s.polygon.push_back(vertex_reference(in, t, s.positions.size()));
+  s.polygon_uvs.clear();
+  for (std::string_view t = in.token_in_line(); !t.empty(); t = in.token_in_line()) {
+    const auto [position, uv] = vertex_reference(in, t, s);
+    s.polygon.push_back(position);
+    s.polygon_uvs.push_back(uv);
+  }
   if (s.polygon.size() < 3)
     in.fail("face has " + std::to_string(s.polygon.size()) + " vertices; a face needs at least 3");
   Group& g = current_group(s, stem);
   append_fan(g.corners, s.polygon);
+  append_fan(g.uv_corners, s.polygon_uvs);
   g.materials.resize(g.corners.size() / 3, s.material);
 }
 
-// "newmtl NAME" ... "Kd r g b" of one .mtl file. Errors name the .mtl file and its line.
+// "newmtl NAME" ... "Kd r g b", "map_Kd [options] FILE" of one .mtl file. Errors name the
+// .mtl file and its line.
 void read_mtl(Bytes bytes, const std::string& name, ObjState& s) {
   TextCursor in(bytes, name, '#');
   uint32_t current = kNoMaterial;
@@ -105,8 +147,8 @@ void read_mtl(Bytes bytes, const std::string& name, ObjState& s) {
     if (key == "newmtl") {
       const std::string material = name_in_line(in, "");
       if (material.empty()) in.fail("'newmtl' needs a name");
-      auto [it, added] = s.material_of_name.emplace(material, uint32_t(s.material_colors.size()));
-      if (added) s.material_colors.push_back(Object{}.color);
+      auto [it, added] = s.material_of_name.emplace(material, uint32_t(s.materials.size()));
+      if (added) s.materials.push_back({material, Object{}.color, ""});
       current = it->second;
     } else if (key == "Kd" && current != kNoMaterial) {
       double c[3];
@@ -115,7 +157,16 @@ void read_mtl(Bytes bytes, const std::string& name, ObjState& s) {
         if (t.empty()) in.fail("'Kd' needs three values");
         v = in.to_double(t, "a colour value");
       }
-      s.material_colors[current] = rgba8(color_channel(c[0], 1.0), color_channel(c[1], 1.0), color_channel(c[2], 1.0));
+      s.materials[current].color = rgba8(color_channel(c[0], 1.0), color_channel(c[1], 1.0), color_channel(c[2], 1.0));
+    } else if (key == "map_Kd" && current != kNoMaterial) {
+      // Options ("-s 1 1 1", "-clamp on") come first; the file is the last token.
+      std::string_view file;
+      for (std::string_view t = in.token_in_line(); !t.empty(); t = in.token_in_line()) file = t;
+      if (file.empty()) in.fail("'map_Kd' needs a file name");
+      // Exporters on Windows write ".\\wall.jpg": a backslash is a separator there.
+      std::string path(file);
+      std::replace(path.begin(), path.end(), '\\', '/');
+      s.materials[current].texture_file = path;
     }
     in.next_line();
   }
@@ -137,34 +188,74 @@ void use_material(TextCursor& in, ObjState& s) {
   const std::string name = name_in_line(in, "");
   auto it = s.material_of_name.find(name);
   if (it == s.material_of_name.end()) {  // not (yet) defined: a colourless material of its own
-    it = s.material_of_name.emplace(name, uint32_t(s.material_colors.size())).first;
-    s.material_colors.push_back(Object{}.color);
+    it = s.material_of_name.emplace(name, uint32_t(s.materials.size())).first;
+    s.materials.push_back({name, Object{}.color, ""});
   }
   s.material = it->second;
 }
 
-// The group's object: its own vertices in the file's order (one per position and material
-// when it has several materials, so that each carries its colour), unfinished.
-Object object_of(const Group& g, const ObjState& s) {
+// The index of the texture material m shows in the model's table, read on first use;
+// kNoTexture for none or one that cannot be read.
+uint32_t texture_of(uint32_t m, ObjState& s, const std::string& base_dir, const std::string& model) {
+  if (m == kNoMaterial || s.materials[m].texture_file.empty()) return kNoTexture;
+  const std::string& file = s.materials[m].texture_file;
+  auto [it, added] = s.texture_of_file.emplace(file, kNoTexture);
+  if (added) {
+    if (std::optional<TextureImage> t = read_texture_file(file, base_dir, model)) {
+      it->second = uint32_t(s.textures.size());
+      s.textures.push_back(std::move(*t));
+    }
+  }
+  return it->second;
+}
+
+// A group's triangles split by the texture their material shows (one part when there is one).
+std::vector<std::pair<Group, uint32_t>> parts_by_texture(const Group& g, ObjState& s, const std::string& base_dir,
+                                                         const std::string& model) {
+  std::map<uint32_t, Group> parts;
+  for (size_t t = 0; t < g.materials.size(); ++t) {
+    const uint32_t texture = texture_of(g.materials[t], s, base_dir, model);
+    Group& part = parts[texture];
+    if (part.name.empty()) part.name = g.name;
+    part.corners.insert(part.corners.end(), g.corners.begin() + 3 * t, g.corners.begin() + 3 * t + 3);
+    part.uv_corners.insert(part.uv_corners.end(), g.uv_corners.begin() + 3 * t, g.uv_corners.begin() + 3 * t + 3);
+    part.materials.push_back(g.materials[t]);
+  }
+  std::vector<std::pair<Group, uint32_t>> out;
+  for (auto& [texture, part] : parts) {
+    if (parts.size() > 1 && texture != kNoTexture) part.name += "/" + s.materials[part.materials.front()].name;
+    out.emplace_back(std::move(part), texture);
+  }
+  return out;
+}
+
+// The object of a group's part that shows `texture`: its own vertices in the file's order (one
+// per position, material when it has several, and texture coordinate when it is textured),
+// unfinished. A textured part with a corner without vt is drawn untextured.
+Object object_of(const Group& g, const ObjState& s, uint32_t texture) {
   bool several = false;
   for (uint32_t m : g.materials) several |= m != g.materials.front();
   const bool vertex_colors = s.colored == s.positions.size() && s.colored > 0;
+  const bool textured =
+      texture != kNoTexture && std::find(g.uv_corners.begin(), g.uv_corners.end(), kNoUv) == g.uv_corners.end();
   Object object;
   object.name = g.name;
-  if (g.materials.front() != kNoMaterial) object.color = s.material_colors[g.materials.front()];
+  if (g.materials.front() != kNoMaterial) object.color = s.materials[g.materials.front()].color;
+  using Key = std::array<uint32_t, 3>;  // position, material, texture coordinate
   const auto key_of = [&](size_t corner) {
-    return uint64_t(g.corners[corner]) << 32 | (several ? g.materials[corner / 3] : 0);
+    return Key{g.corners[corner], several ? g.materials[corner / 3] : 0, textured ? g.uv_corners[corner] : 0};
   };
-  std::vector<uint64_t> keys(g.corners.size());
+  std::vector<Key> keys(g.corners.size());
   for (size_t c = 0; c < keys.size(); ++c) keys[c] = key_of(c);
   std::sort(keys.begin(), keys.end());
   keys.erase(std::unique(keys.begin(), keys.end()), keys.end());
-  for (uint64_t key : keys) {
-    const uint32_t position = uint32_t(key >> 32), material = uint32_t(key);
+  for (const auto& [position, material, uv] : keys) {
     object.mesh.positions.push_back(s.positions[position]);
     if (vertex_colors) object.mesh.colors.push_back(s.colors[position]);
-    else if (several) object.mesh.colors.push_back(material == kNoMaterial ? Object{}.color : s.material_colors[material]);
+    else if (several) object.mesh.colors.push_back(material == kNoMaterial ? Object{}.color : s.materials[material].color);
+    if (textured) object.mesh.uvs.push_back(s.uvs[uv]);
   }
+  if (textured) object.mesh.texture = texture;
   object.mesh.indices.reserve(g.corners.size());
   for (size_t c = 0; c < g.corners.size(); ++c)
     object.mesh.indices.push_back(uint32_t(std::lower_bound(keys.begin(), keys.end(), key_of(c)) - keys.begin()));
@@ -173,13 +264,15 @@ Object object_of(const Group& g, const ObjState& s) {
 
 }  // namespace
 
-std::vector<Object> read_obj(Bytes bytes, const std::string& name, const std::string& base_dir) {
+ImportedModel read_obj(Bytes bytes, const std::string& name, const std::string& base_dir) {
   TextCursor in(bytes, name, '#');
   ObjState s;
   const std::string stem = std::filesystem::path(name).stem().string();
   for (std::string_view key = in.token(); !key.empty(); key = in.token()) {
     if (key == "v") {
       read_vertex(in, s);
+    } else if (key == "vt") {
+      read_uv(in, s);
     } else if (key == "f") {
       read_face(in, s, stem);
     } else if (key == "o") {
@@ -197,7 +290,8 @@ std::vector<Object> read_obj(Bytes bytes, const std::string& name, const std::st
     in.next_line();
   }
   std::vector<Object> objects;
-  for (const Group& g : s.groups) objects.push_back(object_of(g, s));
+  for (const Group& g : s.groups)
+    for (const auto& [part, texture] : parts_by_texture(g, s, base_dir, name)) objects.push_back(object_of(part, s, texture));
   // A point cloud (vertices, no faces) is one object without triangles.
   if (objects.empty() && !s.positions.empty()) {
     objects.emplace_back();
@@ -205,7 +299,7 @@ std::vector<Object> read_obj(Bytes bytes, const std::string& name, const std::st
     objects.back().mesh.positions = s.positions;
     if (s.colored == s.positions.size()) objects.back().mesh.colors = s.colors;
   }
-  return objects;
+  return {std::move(objects), std::move(s.textures)};
 }
 
 }  // namespace cellwalk::detail

@@ -49,6 +49,7 @@ void split(const std::vector<Vec3>& centroids, std::vector<uint32_t>& triangles,
 
 Mesh patch_of(const Mesh& mesh, std::span<const uint32_t> triangles) {
   Mesh out;
+  out.texture = mesh.texture;
   std::unordered_map<uint32_t, uint32_t> vertex_of;
   vertex_of.reserve(triangles.size() * 2);
   for (uint32_t t : triangles) {
@@ -59,6 +60,7 @@ Mesh patch_of(const Mesh& mesh, std::span<const uint32_t> triangles) {
         out.positions.push_back(mesh.positions[v]);
         if (!mesh.normals.empty()) out.normals.push_back(mesh.normals[v]);
         if (!mesh.colors.empty()) out.colors.push_back(mesh.colors[v]);
+        if (!mesh.uvs.empty()) out.uvs.push_back(mesh.uvs[v]);
       }
       out.indices.push_back(it->second);
     }

@@ -5,11 +5,13 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "cellwalk/scene/import.hpp"
 #include "cellwalk/scene/mesh.hpp"
 
 namespace cellwalk::detail {
@@ -21,14 +23,21 @@ using Bytes = std::span<const uint8_t>;
 Object read_off(Bytes bytes, const std::string& name);
 Object read_ply(Bytes bytes, const std::string& name);
 
-// One unfinished object per o/g group (obj_reader.cpp); .mtl files are read from `base_dir`
-// only when it is not empty.
-std::vector<Object> read_obj(Bytes bytes, const std::string& name, const std::string& base_dir);
+// One unfinished object per o/g group and textured material (obj_reader.cpp); .mtl files
+// and the images they name are read from `base_dir` only when it is not empty.
+ImportedModel read_obj(Bytes bytes, const std::string& name, const std::string& base_dir);
 
-// One finished object per mesh node, ids from first_id. External buffers ("x.bin") are read
-// from `base_dir` only when it is not empty; parsing from memory never touches the disk.
-std::vector<Object> read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
-                              const std::string& base_dir);
+// One finished object per triangle primitive, ids from first_id. External buffers ("x.bin")
+// and images are read from `base_dir` only when it is not empty; parsing from memory never
+// touches the disk.
+ImportedModel read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
+                        const std::string& base_dir);
+
+// The bytes of the image file `uri` names below `base_dir` (empty: none), or nullopt with
+// a note on stderr when it cannot be read or is not a PNG/JPEG: a model whose texture is
+// missing still imports, untextured (many exported models name files they were not shipped with).
+std::optional<TextureImage> read_texture_file(const std::string& uri, const std::string& base_dir,
+                                              const std::string& model);
 
 // A glTF (JSON, or GLB when `glb`) whose buffer views use EXT_meshopt_compression (or
 // KHR_meshopt_compression) as an equivalent GLB with those views decoded into one binary

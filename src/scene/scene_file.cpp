@@ -20,12 +20,14 @@ namespace {
 
 constexpr char kMagic[8] = {'C', 'W', 'S', 'C', 'E', 'N', 'E', '1'};
 constexpr char kEndMagic[8] = {'C', 'W', 'S', 'C', 'E', 'N', 'D', '1'};
-constexpr uint32_t kVersion = 1;
+// Version 2 added texture coordinates, textures and the texture table; 1 is still read.
+constexpr uint32_t kVersion = 2;
 constexpr size_t kHeaderBytes = 16;
 constexpr size_t kFrameBytes = 16;    // u32 payload size, u32 zero, u64 xxh3 of the payload
 constexpr size_t kTrailerBytes = 24;  // u64 footer offset, u64 footer bytes, end magic
 constexpr size_t kEntryBytes = 44;   // u64 offset, u32 size, u32 triangles, u32 colour, 6 f32 box
-constexpr uint32_t kHasNormals = 1, kHasColors = 2;
+constexpr size_t kTextureEntryBytes = 12;  // u64 offset, u32 size
+constexpr uint32_t kHasNormals = 1, kHasColors = 2, kHasUvs = 4, kHasTexture = 8;
 
 // Frames a payload: size, zero, checksum, payload.
 void write_framed(AtomicFile& file, std::span<const uint8_t> payload) {
@@ -45,10 +47,13 @@ void encode_object(ByteWriter& w, const Object& o) {
   w.put_string(o.name);
   w.put(static_cast<uint32_t>(m.positions.size()));
   w.put(static_cast<uint32_t>(m.indices.size()));
-  w.put(uint32_t((m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors)));
+  w.put(uint32_t((m.normals.empty() ? 0 : kHasNormals) | (m.colors.empty() ? 0 : kHasColors) |
+                 (m.uvs.empty() ? 0 : kHasUvs) | (m.texture == kNoTexture ? 0 : kHasTexture)));
+  if (m.texture != kNoTexture) w.put(m.texture);
   w.put_array(std::span<const Vec3>(m.positions));
   w.put_array(std::span<const Vec3>(m.normals));
   w.put_array(std::span<const Rgba8>(m.colors));
+  w.put_array(std::span<const Vec2>(m.uvs));
   w.put_array(std::span<const uint32_t>(m.indices));
 }
 
@@ -64,6 +69,7 @@ struct SceneWriter::Impl {
   }
   AtomicFile file;
   std::vector<SceneEntry> entries;
+  std::vector<std::pair<uint64_t, uint32_t>> textures;
   uint64_t triangles = 0;
   Aabb bounds;
   ByteWriter scratch;
@@ -77,6 +83,10 @@ void SceneWriter::add(const Object& object) {
     fail(impl_->file.path(), "object ids must be dense: got " + std::to_string(object.id) +
                                  ", expected " + std::to_string(impl_->entries.size()));
   validate(object.mesh, impl_->file.path() + ": object " + std::to_string(object.id));
+  if (object.mesh.texture != kNoTexture && object.mesh.texture >= impl_->textures.size())
+    fail(impl_->file.path(), "object " + std::to_string(object.id) + " (" + object.name + ") samples texture " +
+                                 std::to_string(object.mesh.texture) + ", but only " +
+                                 std::to_string(impl_->textures.size()) + " were added before it");
   ByteWriter& w = impl_->scratch;
   w.clear();
   encode_object(w, object);
@@ -95,6 +105,20 @@ void SceneWriter::add(const Object& object) {
   impl_->bounds.extend(object.bounds);
 }
 
+void SceneWriter::add_texture(const TextureImage& texture) {
+  const std::string where = impl_->file.path() + ": texture " + std::to_string(impl_->textures.size()) +
+                            " (" + texture.name + ")";
+  check_texture(texture.encoded, where);
+  ByteWriter& w = impl_->scratch;
+  w.clear();
+  w.put_string(texture.name);
+  w.put(uint64_t(texture.encoded.size()));
+  w.put_array(std::span<const uint8_t>(texture.encoded));
+  if (w.size() > UINT32_MAX - kFrameBytes) fail(where, "is larger than 4 GiB, the scene format's limit");
+  impl_->textures.emplace_back(impl_->file.size(), uint32_t(kFrameBytes + w.size()));
+  write_framed(impl_->file, w.bytes());
+}
+
 void SceneWriter::finish(SceneInfo info) {
   info.bounds = impl_->bounds;
   ByteWriter w;
@@ -107,6 +131,11 @@ void SceneWriter::finish(SceneInfo info) {
     w.put(e.triangles);
     w.put(e.color);
     put_box(w, e.bounds);
+  }
+  w.put(static_cast<uint32_t>(impl_->textures.size()));
+  for (const auto& [offset, size] : impl_->textures) {
+    w.put(offset);
+    w.put(size);
   }
   const uint64_t footer_offset = impl_->file.size();
   write_framed(impl_->file, w.bytes());
@@ -150,6 +179,23 @@ std::span<const uint8_t> unframe(std::span<const uint8_t> framed, const std::str
   return payload;
 }
 
+// The footer's texture table (version 2), after the object table.
+std::vector<std::pair<uint64_t, uint32_t>> read_texture_table(ByteReader& r, uint64_t records_end) {
+  std::vector<std::pair<uint64_t, uint32_t>> textures;
+  const uint32_t count = r.get<uint32_t>("texture count");
+  if (count > r.remaining() / kTextureEntryBytes) r.error("texture table truncated: " + std::to_string(count) + " entries announced");
+  textures.resize(count);
+  for (uint32_t i = 0; i < count; ++i) {
+    auto& [offset, size] = textures[i];
+    offset = r.get<uint64_t>("texture offset");
+    size = r.get<uint32_t>("texture size");
+    if (offset < kHeaderBytes || size < kFrameBytes || offset > records_end || size > records_end - offset)
+      r.error("texture " + std::to_string(i) + " points outside the file's records");
+  }
+  if (r.remaining() != 0) r.error("footer has " + std::to_string(r.remaining()) + " trailing bytes");
+  return textures;
+}
+
 }  // namespace
 
 SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
@@ -169,7 +215,7 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
       fail(path_ + "@0", "not a cellwalk scene file (bad magic); give a scene file made by cellwalk generate or import");
     uint32_t version;
     std::memcpy(&version, header.data() + 8, 4);
-    if (version != kVersion)
+    if (version != kVersion && version != 1)
       fail(path_ + "@8", "scene format version " + std::to_string(version) + ", this cellwalk reads " +
                              std::to_string(kVersion));
     auto trailer_bytes = pread_exact(fd_, path_, file_size - kTrailerBytes, kTrailerBytes);
@@ -205,6 +251,7 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
       sum += e.triangles;
     }
     if (sum != triangles_) r.error("triangle total disagrees with the object table");
+    if (version >= 2) textures_ = read_texture_table(r, footer_offset);
   } catch (...) {
     ::close(fd_);
     throw;
@@ -239,9 +286,17 @@ Object SceneReader::decode_record(ObjectId id, std::span<const uint8_t> record) 
   const uint32_t vertices = r.get<uint32_t>("vertex count");
   const uint32_t indices = r.get<uint32_t>("index count");
   const uint32_t attributes = r.get<uint32_t>("attribute flags");
+  if (attributes & ~(kHasNormals | kHasColors | kHasUvs | kHasTexture)) r.error("unknown attribute flags");
+  if (attributes & kHasTexture) {
+    o.mesh.texture = r.get<uint32_t>("texture");
+    if (o.mesh.texture >= textures_.size())
+      r.error("samples texture " + std::to_string(o.mesh.texture) + ", but the scene has " +
+              std::to_string(textures_.size()));
+  }
   o.mesh.positions = r.get_array<Vec3>(vertices, "positions");
   if (attributes & kHasNormals) o.mesh.normals = r.get_array<Vec3>(vertices, "normals");
   if (attributes & kHasColors) o.mesh.colors = r.get_array<Rgba8>(vertices, "colours");
+  if (attributes & kHasUvs) o.mesh.uvs = r.get_array<Vec2>(vertices, "texture coordinates");
   o.mesh.indices = r.get_array<uint32_t>(indices, "indices");
   if (r.remaining() != 0) r.error("record has " + std::to_string(r.remaining()) + " trailing bytes");
   validate(o.mesh, where);
@@ -249,5 +304,22 @@ Object SceneReader::decode_record(ObjectId id, std::span<const uint8_t> record) 
 }
 
 Object SceneReader::read_object(ObjectId id) const { return decode_record(id, read_record(id)); }
+
+TextureImage SceneReader::read_texture(uint32_t index) const {
+  if (index >= textures_.size())
+    fail(path_, "texture " + std::to_string(index) + " does not exist (the scene has " +
+                    std::to_string(textures_.size()) + ")");
+  const auto [offset, size] = textures_[index];
+  const std::vector<uint8_t> record = pread_exact(fd_, path_, offset, size);
+  bytes_read_ += size;
+  auto payload = unframe(record, path_, offset, ("texture " + std::to_string(index)).c_str());
+  ByteReader r(payload, path_, offset + kFrameBytes);
+  TextureImage t;
+  t.name = r.get_string("texture name");
+  const uint64_t bytes = r.get<uint64_t>("texture byte count");
+  if (bytes != r.remaining()) r.error("texture byte count disagrees with its record");
+  t.encoded = r.get_array<uint8_t>(bytes, "texture bytes");
+  return t;
+}
 
 }  // namespace cellwalk

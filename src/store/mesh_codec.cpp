@@ -21,7 +21,7 @@ namespace {
 
 constexpr std::array<uint8_t, 4> kMagic = {'C', 'W', 'M', 'C'};
 constexpr uint8_t kVersion = 1;
-constexpr uint8_t kHasNormals = 1, kHasColors = 2, kZstd = 4;
+constexpr uint8_t kHasNormals = 1, kHasColors = 2, kZstd = 4, kHasUvs = 8, kHasTexture = 16;
 
 // A quantised position; the pad keeps the vertex a multiple of 4 bytes as the codec needs.
 struct QuantisedPosition {
@@ -35,6 +35,7 @@ struct Header {
   uint32_t vertex_count = 0;
   uint32_t index_count = 0;
   Aabb box;
+  uint32_t texture = kNoTexture;
 };
 
 size_t normal_size(int bits) {
@@ -97,6 +98,8 @@ std::vector<uint8_t> encode_body(const Mesh& mesh, const Aabb& box, const CodecP
   if (!mesh.colors.empty()) {
     put_vertex_stream(w, mesh.colors.data(), mesh.vertex_count(), sizeof(Rgba8));
   }
+  // Texture coordinates are kept exactly: a texel is small next to a quantisation step.
+  if (!mesh.uvs.empty()) put_vertex_stream(w, mesh.uvs.data(), mesh.vertex_count(), sizeof(Vec2));
   put_index_stream(w, mesh);
   return std::move(w.bytes());
 }
@@ -133,7 +136,12 @@ Header read_header(ByteReader& r) {
   h.index_count = r.get<uint32_t>("index count");
   h.box.min = r.get<Vec3>("box min");
   h.box.max = r.get<Vec3>("box max");
-  if (h.flags & ~(kHasNormals | kHasColors | kZstd)) r.error("unknown flags");
+  if (h.flags & ~(kHasNormals | kHasColors | kZstd | kHasUvs | kHasTexture)) r.error("unknown flags");
+  if (h.flags & kHasTexture) {
+    if (!(h.flags & kHasUvs)) r.error("a texture without texture coordinates");
+    h.texture = r.get<uint32_t>("texture");
+    if (h.texture == kNoTexture) r.error("texture flag set but no texture named");
+  }
   if (h.position_bits < 1 || h.position_bits > 16) r.error("position bits out of range");
   if (h.normal_bits < 2 || h.normal_bits > 16) r.error("normal bits out of range");
   if (h.index_count % 3 != 0) r.error("index count is not a multiple of 3");
@@ -150,6 +158,7 @@ size_t mesh_bytes(const Header& h) {
   size_t per_vertex = sizeof(Vec3);
   if (h.flags & kHasNormals) per_vertex += sizeof(Vec3);
   if (h.flags & kHasColors) per_vertex += sizeof(Rgba8);
+  if (h.flags & kHasUvs) per_vertex += sizeof(Vec2);
   return size_t(h.vertex_count) * per_vertex + size_t(h.index_count) * sizeof(uint32_t);
 }
 
@@ -160,6 +169,7 @@ size_t body_bound(const Header& h) {
     n += 4 + meshopt_encodeVertexBufferBound(h.vertex_count, normal_size(h.normal_bits));
   }
   if (h.flags & kHasColors) n += 4 + meshopt_encodeVertexBufferBound(h.vertex_count, 4);
+  if (h.flags & kHasUvs) n += 4 + meshopt_encodeVertexBufferBound(h.vertex_count, sizeof(Vec2));
   return n + 4 + meshopt_encodeIndexBufferBound(h.index_count, h.vertex_count);
 }
 
@@ -259,6 +269,11 @@ Mesh decode_body(ByteReader& r, const Header& h) {
     mesh.colors.resize(h.vertex_count);
     get_vertex_stream(r, mesh.colors.data(), h.vertex_count, sizeof(Rgba8), "colors");
   }
+  if (h.flags & kHasUvs) {
+    mesh.uvs.resize(h.vertex_count);
+    get_vertex_stream(r, mesh.uvs.data(), h.vertex_count, sizeof(Vec2), "texture coordinates");
+  }
+  mesh.texture = h.texture;
   get_indices(r, h, mesh);
   if (r.remaining() != 0) r.error("trailing bytes after the index stream");
   return mesh;
@@ -273,13 +288,15 @@ std::vector<uint8_t> encode_mesh(const Mesh& mesh, const CodecParams& params) {
   w.put_array<uint8_t>(kMagic);
   w.put(kVersion);
   w.put(uint8_t((mesh.normals.empty() ? 0 : kHasNormals) | (mesh.colors.empty() ? 0 : kHasColors) |
-                (params.zstd ? kZstd : 0)));
+                (params.zstd ? kZstd : 0) | (mesh.uvs.empty() ? 0 : kHasUvs) |
+                (mesh.texture == kNoTexture ? 0 : kHasTexture)));
   w.put(uint8_t(params.position_bits));
   w.put(uint8_t(params.normal_bits));
   w.put(uint32_t(mesh.vertex_count()));
   w.put(uint32_t(mesh.indices.size()));
   w.put(box.min);
   w.put(box.max);
+  if (mesh.texture != kNoTexture) w.put(mesh.texture);
   std::vector<uint8_t> body = encode_body(mesh, box, params);
   if (params.zstd) {
     w.put(uint32_t(body.size()));

@@ -49,6 +49,21 @@ World::World(const std::string& path, WorldFile::Options options) : file_(path, 
         r.error("object's levels lie outside the level table");
     }
   }
+  if (file_.has_section(world_sections::kTextureTable)) {
+    const SectionInfo& s = file_.section(world_sections::kTextureTable);
+    auto bytes = file_.read(s, 0, s.bytes);
+    ByteReader r(bytes, path + ": section texture_table", 0);
+    if (s.bytes % world_sections::kTextureRecordBytes != 0) r.error("size is not a whole number of texture records");
+    const uint64_t image_bytes = file_.section(world_sections::kTextures).bytes;
+    textures_.resize(s.bytes / world_sections::kTextureRecordBytes);
+    for (auto& [offset, size] : textures_) {
+      offset = r.get<uint64_t>("texture offset");
+      size = r.get<uint32_t>("texture bytes");
+      r.get<uint32_t>("padding");
+      if (size == 0 || offset > image_bytes || size > image_bytes - offset)
+        r.error("texture points outside the textures section");
+    }
+  }
 }
 
 const LodRecord& World::lod(ObjectId id, uint32_t level) const {
@@ -77,7 +92,23 @@ Mesh World::decode_level(ObjectId id, uint32_t level, std::span<const uint8_t> b
     fail(file_.path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
          "decoded " + std::to_string(mesh.triangle_count()) + " triangles, the directory says " +
              std::to_string(l.triangles));
+  if (mesh.texture != kNoTexture && mesh.texture >= textures_.size())
+    fail(file_.path() + ": object " + std::to_string(id) + " level " + std::to_string(level),
+         "samples texture " + std::to_string(mesh.texture) + ", but the world has " +
+             std::to_string(textures_.size()) + " (the file is damaged: rebuild it)");
   return mesh;
+}
+
+std::vector<uint8_t> World::read_texture(uint32_t index) const {
+  if (index >= textures_.size())
+    fail(file_.path(), "texture " + std::to_string(index) + " does not exist (the world has " +
+                           std::to_string(textures_.size()) + ")");
+  const auto [offset, size] = textures_[index];
+  return file_.read(file_.section(world_sections::kTextures), offset, size);
+}
+
+Texture World::load_texture(uint32_t index, uint32_t max_side) const {
+  return decode_texture(read_texture(index), file_.path() + ": texture " + std::to_string(index), max_side);
 }
 
 std::vector<std::string> World::object_names() const {
@@ -92,6 +123,7 @@ std::vector<std::string> World::object_names() const {
 
 uint64_t World::resident_bytes() const {
   return objects_.capacity() * sizeof(ObjectRecord) + lods_.capacity() * sizeof(LodRecord) +
+         textures_.capacity() * sizeof(textures_[0]) +
          file_.resident_bytes() + info_.nav.nodes.size() * sizeof(Vec3) + info_.nav.edges.size() * 8;
 }
 

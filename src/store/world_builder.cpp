@@ -84,6 +84,25 @@ std::span<const uint8_t> as_bytes(const std::string& s) {
   return {reinterpret_cast<const uint8_t*>(s.data()), s.size()};
 }
 
+// The scene's textures, as their image files, one after another, and their table. A world
+// without textures has neither section (a section of no bytes has no page).
+void write_textures(const SceneReader& scene, WorldWriter& writer) {
+  if (scene.texture_count() == 0) return;
+  ByteWriter table;
+  writer.begin_section(world_sections::kTextures);
+  for (uint32_t i = 0; i < scene.texture_count(); ++i) {
+    const TextureImage texture = scene.read_texture(i);
+    table.put(writer.section_offset());
+    table.put(uint32_t(texture.encoded.size()));
+    table.put(uint32_t{0});
+    writer.write(texture.encoded);
+  }
+  writer.end_section();
+  writer.begin_section(world_sections::kTextureTable);
+  writer.write(table.bytes());
+  writer.end_section();
+}
+
 }  // namespace
 
 BuildReport build_world(const std::string& scene_file, const std::string& world_file,
@@ -162,6 +181,7 @@ BuildReport build_world(const std::string& scene_file, const std::string& world_
   writer.begin_section(world_sections::kParams);
   writer.write(as_bytes(params_json(params, scene_file)));
   writer.end_section();
+  write_textures(scene, writer);
   if (!objects.empty()) {  // a section of no bytes has no page: the format has none
     writer.begin_section(world_sections::kNames);
     writer.write(names.bytes());

@@ -15,6 +15,7 @@
 #include "cellwalk/core/camera.hpp"
 #include "cellwalk/render/image.hpp"
 #include "cellwalk/scene/mesh.hpp"
+#include "cellwalk/scene/texture.hpp"
 
 namespace cellwalk {
 
@@ -65,6 +66,11 @@ inline uint32_t pixel_id(const DrawItem& item) { return (uint32_t(item.kind) << 
 // Supplies the geometry of a draw item that is not resident on the GPU. The pointer must stay
 // valid until the provider is called again. Returning nullptr skips the item (data not ready).
 using MeshProvider = std::function<const Mesh*(const DrawItem&)>;
+
+// Supplies base-colour texture `index` (Mesh::texture) decoded, its larger side at most
+// `max_side` texels (decode_texture does that), when a mesh that samples it is drawn and the
+// renderer does not hold it; nullopt draws the mesh untextured.
+using TextureSource = std::function<std::optional<Texture>(uint32_t index, uint32_t max_side)>;
 
 // A far-field image on a face of a view cell's bounding box (stratified rendering, seed 002
 // §3.1.2): the quad origin + s·u + t·v, s, t in [0, 1], showing `color` with (s, t) = (0, 0) at
@@ -124,6 +130,11 @@ struct RenderSettings {
   uint64_t gpu_budget_bytes = 512ull << 20;
   // Far-face textures are kept under this many bytes (LRU), apart from the meshes.
   uint64_t far_face_budget_bytes = 64ull << 20;
+  // The share of gpu_budget_bytes that base-colour textures take once a TextureSource is set
+  // (the meshes keep the rest, so the two together stay within gpu_budget_bytes), at most
+  // max_texture_budget_bytes (mipmapped RGBA8, LRU).
+  double texture_share = 0.25;
+  uint64_t max_texture_budget_bytes = 128ull << 20;
 };
 
 // Triangles queued between waits for the GPU. Mesa's llvmpipe bins every triangle queued since
@@ -146,6 +157,11 @@ class Renderer {
   // geometry that sticks out past its box is never hidden by them (digest 002 §3.6).
   RenderStats render(const Camera& camera, std::span<const DrawItem> items,
                      const MeshProvider& provider, std::span<const FarFace> far_faces = {});
+
+  // Where the textures meshes sample come from (a world's, world_textures()). Until one is set
+  // meshes are drawn untextured and the whole GPU budget holds meshes; setting one gives
+  // textures their share of it (RenderSettings::texture_share).
+  void set_texture_source(TextureSource source);
 
   // Overlays, drawn over the colour target of the last render() (so read_color() and present()
   // include them) without depth test; the id target is left as render() wrote it. Call them

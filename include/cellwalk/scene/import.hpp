@@ -18,14 +18,25 @@ enum class ModelFormat { kObj, kPly, kOff, kGltf };
 // By extension (.obj .ply .off .gltf .glb, case-insensitive); throws Error otherwise.
 ModelFormat format_of(const std::string& file);
 
+// What a model file holds: its objects, and the base-colour textures they sample (a mesh's
+// `texture` indexes `textures`, from 0 for each model: the images its materials show).
+struct ImportedModel {
+  std::vector<Object> objects;
+  std::vector<TextureImage> textures;
+};
+
 // Parses a model held in memory. `name` is used in error messages and object names.
-// glTF files give one object per mesh node (node transforms applied); the others give one
-// object. Objects get ids first_id, first_id + 1, ...; normals are computed when absent.
-std::vector<Object> parse_model(ModelFormat format, std::span<const uint8_t> bytes,
-                                const std::string& name, ObjectId first_id = 0);
+// glTF files give one object per triangle primitive (node transforms applied), OBJ files one
+// per o/g group and textured material; the others give one object. Objects get ids first_id,
+// first_id + 1, ...; normals are computed when absent. Textures: glTF's baseColorTexture (with
+// its TEXCOORD_n) and OBJ's map_Kd (with vt), from the file itself or, when read from a file,
+// image files beside it; parsing from memory reads no other file, and a texture it cannot
+// read leaves its meshes untextured.
+ImportedModel parse_model(ModelFormat format, std::span<const uint8_t> bytes,
+                          const std::string& name, ObjectId first_id = 0);
 
 // Reads and parses a file (a directory, an empty or unreadable file is an Error).
-std::vector<Object> import_model(const std::string& file, ObjectId first_id = 0);
+ImportedModel import_model(const std::string& file, ObjectId first_id = 0);
 
 // Splits an object of more than `max_triangles` triangles into spatial patches of at most that
 // many (recursive median splits of triangle centroids along the longest axis), each with its

@@ -19,12 +19,19 @@ constexpr Rgba8 rgba8(uint8_t r, uint8_t g, uint8_t b, uint8_t a = 255) {
   return uint32_t(r) | uint32_t(g) << 8 | uint32_t(b) << 16 | uint32_t(a) << 24;
 }
 
-// An indexed triangle list. normals and colors are either empty or one per position.
+// The texture a mesh samples, when it samples none.
+inline constexpr uint32_t kNoTexture = UINT32_MAX;
+
+// An indexed triangle list. normals, colors and uvs are either empty or one per position.
 struct Mesh {
   std::vector<Vec3> positions;
   std::vector<Vec3> normals;
   std::vector<Rgba8> colors;
+  std::vector<Vec2> uvs;          // texture coordinates, (0, 0) the image's top-left corner
   std::vector<uint32_t> indices;  // three per triangle
+  // The scene's base-colour texture (an index into its texture table, scene/texture.hpp) that
+  // the uvs sample, multiplied by the vertex or object colour; kNoTexture for none.
+  uint32_t texture = kNoTexture;
 
   size_t vertex_count() const { return positions.size(); }
   size_t triangle_count() const { return indices.size() / 3; }
@@ -41,8 +48,8 @@ struct Object {
 };
 
 // Checks what every consumer relies on: a whole number of triangles, indices in range,
-// positions finite and within ±kMaxCoordinate (check_position), finite normals, normals/colors
-// empty or one per position. Throws Error naming `where` and the vertex.
+// positions finite and within ±kMaxCoordinate (check_position), finite normals and uvs,
+// normals/colors/uvs empty or one per position, a texture only with uvs. Throws Error naming `where` and the vertex.
 void validate(const Mesh& mesh, std::string_view where);
 
 // Area-weighted vertex normals; replaces any normals present.
@@ -55,7 +62,7 @@ Aabb bounds_of(const Mesh& mesh);
 void transform(Mesh& mesh, const Mat4& m);
 
 // Appends `src` to `dst`, offsetting indices. Normals/colours are kept only if both have them
-// (an empty dst takes src's layout).
+// (an empty dst takes src's layout); uvs and the texture only if both sample the same one.
 void append(Mesh& dst, const Mesh& src);
 
 }  // namespace cellwalk

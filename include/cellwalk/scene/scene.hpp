@@ -10,6 +10,7 @@
 
 #include "cellwalk/core/geometry.hpp"
 #include "cellwalk/scene/mesh.hpp"
+#include "cellwalk/scene/texture.hpp"
 
 namespace cellwalk {
 
@@ -30,11 +31,14 @@ struct SceneInfo {
 };
 
 // Receives objects one at a time. add() assigns nothing: ids are the producer's, dense from 0
-// in the order objects are added.
+// in the order objects are added. Textures are numbered the same way, and a texture is added
+// before the first object whose mesh samples it.
 class ObjectSink {
  public:
   virtual ~ObjectSink() = default;
   virtual void add(const Object& object) = 0;
+  // Sinks that keep geometry only (an OBJ for inspection, counters) ignore textures.
+  virtual void add_texture(const TextureImage& texture) { (void)texture; }
 };
 
 // Counts what passes through, for the "objects, triangles, bytes" every producer prints.
@@ -57,6 +61,9 @@ class TeeSink : public ObjectSink {
   explicit TeeSink(std::vector<ObjectSink*> sinks) : sinks_(std::move(sinks)) {}
   void add(const Object& object) override {
     for (ObjectSink* s : sinks_) s->add(object);
+  }
+  void add_texture(const TextureImage& texture) override {
+    for (ObjectSink* s : sinks_) s->add_texture(texture);
   }
 
  private:

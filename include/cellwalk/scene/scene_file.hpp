@@ -22,7 +22,10 @@ class SceneWriter : public ObjectSink {
   explicit SceneWriter(std::string path);
   ~SceneWriter() override;  // removes the temporary file if finish() was not reached
   // REQUIRES: object.id == number of objects added before (ids are dense).
+  // REQUIRES: object.mesh.texture is kNoTexture or a texture added before.
   void add(const Object& object) override;
+  // Keeps the image's bytes as they are; checks that it is a PNG or JPEG (check_texture).
+  void add_texture(const TextureImage& texture) override;
   // `info.bounds` is replaced by the union of the objects' bounds.
   void finish(SceneInfo info);
 
@@ -54,6 +57,8 @@ class SceneReader {
   const SceneEntry& entry(ObjectId id) const { return entries_.at(id); }
   uint64_t triangle_count() const { return triangles_; }
   Object read_object(ObjectId id) const;
+  size_t texture_count() const { return textures_.size(); }
+  TextureImage read_texture(uint32_t index) const;
   // The two halves of read_object, so callers can time I/O and decoding apart.
   std::vector<uint8_t> read_record(ObjectId id) const;
   Object decode_record(ObjectId id, std::span<const uint8_t> record) const;
@@ -65,6 +70,7 @@ class SceneReader {
   int fd_ = -1;
   SceneInfo info_;
   std::vector<SceneEntry> entries_;
+  std::vector<std::pair<uint64_t, uint32_t>> textures_;  // record offset and size
   uint64_t triangles_ = 0;
   mutable std::atomic<uint64_t> bytes_read_{0};
 };

@@ -14,6 +14,7 @@
 #include "cellwalk/scene/mesh.hpp"
 #include "cellwalk/store/mesh_codec.hpp"
 #include "cellwalk/scene/scene.hpp"
+#include "cellwalk/scene/texture.hpp"
 #include "cellwalk/store/world_file.hpp"
 
 namespace cellwalk {
@@ -83,6 +84,13 @@ class World {
   std::vector<uint8_t> read_level(ObjectId id, uint32_t level) const;
   Mesh decode_level(ObjectId id, uint32_t level, std::span<const uint8_t> bytes) const;
 
+  // Base-colour textures: how many the world has, and one's image file (PNG or JPEG, verified
+  // pages; decode it with decode_texture). Meshes name them by index (Mesh::texture).
+  size_t texture_count() const { return textures_.size(); }
+  std::vector<uint8_t> read_texture(uint32_t index) const;
+  // read_texture and decode_texture: texture `index`, its larger side at most max_side.
+  Texture load_texture(uint32_t index, uint32_t max_side) const;
+
   // The objects' names, in id order, read from the file on each call (the directory does not
   // hold them: a budgeted run never needs them). Empty names for a world built without them.
   std::vector<std::string> object_names() const;
@@ -95,6 +103,7 @@ class World {
   std::string params_json_;
   std::vector<ObjectRecord> objects_;
   std::vector<LodRecord> lods_;
+  std::vector<std::pair<uint64_t, uint32_t>> textures_;  // offset in the textures section, bytes
 };
 
 }  // namespace cellwalk

@@ -1,0 +1,43 @@
+// Base-colour textures: a scene keeps each as its image file's own bytes (PNG or JPEG, as the
+// model had it), so textures stay compressed on disk and in transit and are decoded only where
+// they are drawn. Meshes name a texture by its index in the scene's table (Mesh::texture).
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "cellwalk/scene/mesh.hpp"
+
+namespace cellwalk {
+
+// One entry of a scene's texture table.
+struct TextureImage {
+  std::string name;              // where it came from (a file name or "glb image 3"), for messages
+  std::vector<uint8_t> encoded;  // the PNG or JPEG file's bytes
+};
+
+// A decoded texture: RGBA8 texels, rows top-down (texel (0, 0) at uv (0, 0)).
+struct Texture {
+  uint32_t width = 0;
+  uint32_t height = 0;
+  std::vector<Rgba8> texels;
+  size_t byte_size() const { return texels.size() * sizeof(Rgba8); }
+};
+
+// The larger side a decoded texture keeps by default: larger images are halved until they fit,
+// which bounds the memory one texture takes while it is decoded and drawn (16 MiB at 2048).
+inline constexpr uint32_t kMaxTextureSide = 2048;
+
+// Reads the image's size and checks that it is a PNG or JPEG this build decodes, without
+// decoding it. Throws Error naming `where` and what to do.
+void check_texture(std::span<const uint8_t> encoded, std::string_view where);
+
+// Decodes to RGBA8 and halves (box filter) until neither side exceeds max_side.
+// Throws Error naming `where` for an image that is damaged or not PNG/JPEG.
+Texture decode_texture(std::span<const uint8_t> encoded, std::string_view where,
+                       uint32_t max_side = kMaxTextureSide);
+
+}  // namespace cellwalk
