@@ -646,6 +646,113 @@ TEST_F(RendererTest, BackdropGroundLiesAtTheWorldsFloor) {
   EXPECT_FLOAT_EQ(scan.ground_grid, 0.1f);
 }
 
+// A quad in the plane z = 0 facing the test camera, x in [x0, x1], y in [y0, y1], with uvs
+// (0, 0) at its top-left corner and (1, 1) at its bottom-right when it samples `texture`.
+Mesh facing_quad(float x0, float x1, float y0, float y1, uint32_t texture = kNoTexture) {
+  Mesh m;
+  m.positions = {{x0, y1, 0}, {x1, y1, 0}, {x0, y0, 0}, {x1, y0, 0}};
+  m.normals.assign(4, Vec3(0, 0, 1));
+  m.indices = {0, 2, 1, 1, 2, 3};
+  if (texture != kNoTexture) {
+    m.uvs = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+    m.texture = texture;
+  }
+  return m;
+}
+
+// 4 × 4 blocks of 2 × 2 texels, each block its own colour: linear filtering at a block's centre
+// mixes only texels of that block, so the colour there is exact.
+constexpr int kBlocks = 4;
+Rgba8 block_color(int column, int row) {
+  return rgba8(uint8_t(40 + 60 * column), uint8_t(30 + 70 * row), uint8_t(200 - 40 * (column + row)));
+}
+Texture block_texture() {
+  Texture t;
+  t.width = t.height = 2 * kBlocks;
+  for (uint32_t y = 0; y < t.height; ++y)
+    for (uint32_t x = 0; x < t.width; ++x) t.texels.push_back(block_color(int(x / 2), int(y / 2)));
+  return t;
+}
+
+// The reference a textured render is compared with: each block drawn as an untextured quad of
+// its colour, where the texture would put it.
+TEST_F(RendererTest, TexturedQuadMatchesItsUntexturedReference) {
+  constexpr float kX0 = -4, kX1 = 4, kY0 = -3, kY1 = 3;
+  Meshes textured, reference;
+  textured.add(0, facing_quad(kX0, kX1, kY0, kY1, 5));
+  std::vector<DrawItem> reference_items;
+  const float bw = (kX1 - kX0) / kBlocks, bh = (kY1 - kY0) / kBlocks;
+  for (int row = 0; row < kBlocks; ++row)
+    for (int column = 0; column < kBlocks; ++column) {
+      const uint32_t id = uint32_t(1 + row * kBlocks + column);  // 0 is the textured quad, held by the cache
+      reference.add(id, facing_quad(kX0 + bw * column, kX0 + bw * (column + 1), kY1 - bh * (row + 1), kY1 - bh * row));
+      reference_items.push_back({id, 0, block_color(column, row)});
+    }
+  Renderer renderer(settings());
+  std::vector<uint32_t> asked;
+  renderer.set_texture_source([&](uint32_t index, uint32_t) -> std::optional<Texture> {
+    asked.push_back(index);
+    return block_texture();
+  });
+  const std::vector<DrawItem> items{{0, 0, rgba8(255, 255, 255)}};
+  for (int frame = 0; frame < 2; ++frame) renderer.render(test_camera(), items, textured.provider());
+  EXPECT_EQ(asked, std::vector<uint32_t>{5}) << "asked once, then held";
+  const Image got = renderer.read_color();
+  renderer.render(test_camera(), reference_items, reference.provider());
+  const Image want = renderer.read_color();
+  // The blocks' centres, projected: the camera looks down -z from z = 10 with a 60° fov.
+  const float half_height = 10.0f * std::tan(glm::radians(30.0f)), half_width = half_height * kWidth / kHeight;
+  int compared = 0;
+  for (int row = 0; row < kBlocks; ++row)
+    for (int column = 0; column < kBlocks; ++column) {
+      const float cx = kX0 + bw * (column + 0.5f), cy = kY1 - bh * (row + 0.5f);
+      const int px = int((cx / half_width * 0.5f + 0.5f) * kWidth), py = int((cy / half_height * 0.5f + 0.5f) * kHeight);
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const size_t at = (size_t(py + dy) * kWidth + size_t(px + dx)) * 4;
+          for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(got.rgba[at + c], want.rgba[at + c], 1) << "block " << column << "," << row << " channel " << c;
+          ++compared;
+        }
+    }
+  EXPECT_EQ(compared, kBlocks * kBlocks * 9);
+  // Without a source the same mesh is drawn in its colour alone.
+  Renderer plain(settings());
+  plain.render(test_camera(), items, textured.provider());
+  const Image flat = plain.read_color();
+  const size_t centre = (size_t(kHeight / 2) * kWidth + kWidth / 2) * 4;
+  EXPECT_EQ(flat.rgba[centre], flat.rgba[centre + 1]);
+  EXPECT_EQ(flat.rgba[centre + 1], flat.rgba[centre + 2]);
+}
+
+// Textures take their share of the GPU budget, and a source is asked for textures no larger
+// than half that share, so meshes and textures together stay within gpu_budget_bytes.
+TEST_F(RendererTest, TexturesStayWithinTheirShareOfTheGpuBudget) {
+  const uint64_t budget = 256 << 10;  // textures: 64 KiB, so at most 32 KiB each: 64 × 64 texels
+  Renderer renderer(settings(budget));
+  std::vector<uint32_t> sides;
+  renderer.set_texture_source([&](uint32_t, uint32_t max_side) -> std::optional<Texture> {
+    sides.push_back(max_side);
+    Texture t;
+    t.width = t.height = max_side;
+    t.texels.assign(size_t(max_side) * max_side, rgba8(200, 100, 50));
+    return t;
+  });
+  Meshes meshes;
+  std::vector<DrawItem> items;
+  for (uint32_t i = 0; i < 6; ++i) {
+    meshes.add(i, facing_quad(-4.0f + i, -3.0f + i, -1, 1, i));
+    items.push_back({i, 0});
+  }
+  for (int frame = 0; frame < 3; ++frame) {
+    const RenderStats stats = renderer.render(test_camera(), items, meshes.provider());
+    EXPECT_LE(stats.gpu_resident_bytes, budget);
+  }
+  ASSERT_FALSE(sides.empty());
+  for (uint32_t side : sides) EXPECT_EQ(side, 64u);
+  EXPECT_GT(sides.size(), 6u) << "six textures of 21 KiB each do not fit in 64 KiB: some are fetched again";
+}
+
 TEST(WritePng, WritesAValidTopDownPng) {
   test::TempDir dir;
   std::string file = dir.file("out.png");

@@ -63,6 +63,7 @@ nlohmann::ordered_json world_json(const std::string& file) {
           {"levels", levels},
           {"triangles_per_level", per_level},
           {"stored_triangles", stored},
+          {"textures", world.texture_count()},
           {"bounds", {{info.bounds.min.x, info.bounds.min.y, info.bounds.min.z},
                       {info.bounds.max.x, info.bounds.max.y, info.bounds.max.z}}},
           {"nav_nodes", info.nav.nodes.size()},

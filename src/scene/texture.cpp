@@ -20,7 +20,7 @@
 namespace cellwalk {
 namespace {
 
-constexpr int kMaxDecodedSide = 1 << 15;  // refused above this: a damaged header, or a poster
+constexpr int kMaxDecodedSide = 8192;  // refused above this (256 MiB decoded): a damaged header, or a poster
 
 int checked_length(std::span<const uint8_t> encoded, std::string_view where) {
   if (encoded.empty()) fail(where, "texture image is empty");
@@ -67,7 +67,7 @@ void check_texture(std::span<const uint8_t> encoded, std::string_view where) {
                     "); convert it to PNG or JPEG");
   if (w <= 0 || h <= 0 || w > kMaxDecodedSide || h > kMaxDecodedSide)
     fail(where, "texture is " + std::to_string(w) + " x " + std::to_string(h) +
-                    " texels; cellwalk reads up to " + std::to_string(kMaxDecodedSide) + " a side");
+                    " texels; cellwalk reads up to " + std::to_string(kMaxDecodedSide) + " a side: scale it down");
 }
 
 Texture decode_texture(std::span<const uint8_t> encoded, std::string_view where, uint32_t max_side) {
