@@ -42,5 +42,5 @@ set(CPACK_DEBIAN_PACKAGE_SECTION graphics)
 set(CPACK_DEBIAN_FILE_NAME DEB-DEFAULT)
 # The CLI's shared libraries, found by dpkg-shlibdeps; the headers' packages for the library.
 set(CPACK_DEBIAN_PACKAGE_SHLIBDEPS ON)
-set(CPACK_DEBIAN_PACKAGE_DEPENDS "libglm-dev, nlohmann-json3-dev, libmeshoptimizer-dev, libdraco-dev, libembree-dev, libtbb-dev, libglfw3-dev, libepoxy-dev, libxxhash-dev, libzstd-dev, libsqlite3-dev")
+set(CPACK_DEBIAN_PACKAGE_DEPENDS "libglm-dev, nlohmann-json3-dev, libmeshoptimizer-dev, libdraco-dev, libpng-dev, libjpeg-dev, libembree-dev, libtbb-dev, libglfw3-dev, libepoxy-dev, libxxhash-dev, libzstd-dev, libsqlite3-dev")
 include(CPack)

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <tuple>
 #include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -214,9 +215,16 @@ TEST(TextureStore, SceneAndWorldKeepTexturesAndTheLevelsSampleThem) {
   const World world(dir.file("t.cww"));
   ASSERT_EQ(world.texture_count(), 2u);
   EXPECT_EQ(world.read_texture(0), png);
-  const Texture t = world.load_texture(1, 8);
-  EXPECT_EQ(t.width, 8u);
-  EXPECT_EQ(t.height, 4u);
+  // The largest level within the asked side, each the previous halved, down to 1 × 1.
+  for (const auto& [asked, w, h] : {std::tuple{100u, 16u, 8u}, {16u, 16u, 8u}, {15u, 8u, 4u}, {8u, 8u, 4u}, {3u, 2u, 1u}, {0u, 1u, 1u}}) {
+    const Texture t = world.load_texture(1, asked);
+    EXPECT_EQ(t.width, w) << "asked " << asked;
+    EXPECT_EQ(t.height, h) << "asked " << asked;
+  }
+  // A level is the original halved by the box filter: the 8 × 4 level's texels are the means.
+  const Texture level1 = world.load_texture(0, 8);
+  const Texture halved = decode_texture(png, "g.png", 8);
+  EXPECT_EQ(level1.texels, halved.texels) << "PNG levels are lossless";
   for (uint32_t level = 0; level < world.object(0).lod_count; ++level) {
     const Mesh m = world.decode_level(0, level, world.read_level(0, level));
     EXPECT_EQ(m.texture, 0u);

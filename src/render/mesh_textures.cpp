@@ -12,12 +12,18 @@ uint64_t texture_bytes(uint32_t width, uint32_t height) {
   return uint64_t(width) * height * 4 * 4 / 3;
 }
 
+uint64_t texture_room(uint32_t side) {
+  // While a texture is fetched and uploaded: its encoded level and its decoded texels (each at
+  // most w × h × 4) beside the GL storage being filled.
+  return texture_bytes(side, side) + 2 * uint64_t(side) * side * 4;
+}
+
 namespace {
 
-// The largest power-of-two side whose square texture, mipmapped, takes at most `bytes`.
+// The largest power-of-two side whose square texture needs at most `bytes` of room.
 uint32_t max_side_within(uint64_t bytes) {
   uint32_t side = 1;
-  while (side < (1u << 15) && texture_bytes(side * 2, side * 2) <= bytes) side *= 2;
+  while (side < (1u << 15) && texture_room(side * 2) <= bytes) side *= 2;
   return side;
 }
 
@@ -51,12 +57,13 @@ uint32_t MeshTextures::get(uint32_t index, const TextureSource& source, uint64_t
   }
   if (!source || budget_ == 0) return 0;
   const uint32_t max_side = max_side_within(budget_ / 2);
+  // Room first, so the fetch's transient bytes are within the budget too.
+  while (resident_bytes_ + texture_room(max_side) > budget_ && !lru_.empty()) evict_least_recent();
   const std::optional<Texture> t = source(index, max_side);
   Entry entry;
   if (t && t->width > 0 && t->height > 0 && t->width <= max_side && t->height <= max_side &&
       t->texels.size() == size_t(t->width) * t->height) {
     entry.bytes = texture_bytes(t->width, t->height);
-    while (resident_bytes_ + entry.bytes > budget_ && !lru_.empty()) evict_least_recent();
     entry.texture = upload(*t);
     uploaded += entry.bytes;
     resident_bytes_ += entry.bytes;

@@ -21,10 +21,12 @@ class MeshTextures {
   MeshTextures& operator=(const MeshTextures&) = delete;
 
   // The GL texture of `index`, fetched from `source` and uploaded (evicting the least recently
-  // used) when not resident; 0 when the source has none (or gives one larger than it was
+  // used first) when not resident; 0 when the source has none (or gives one larger than it was
   // asked for) or the budget is 0. The source is asked for a side at most the largest power of
-  // two whose square texture takes half the budget, so two textures always fit: under a small
-  // budget textures are drawn coarser, never over it. `uploaded` gets the bytes uploaded.
+  // two whose texture_room is half the budget, and that room is made before it is asked, so
+  // the texture, the bytes its fetch holds for a moment and the textures kept stay within the
+  // budget: under a small budget textures are drawn coarser, never over it. `uploaded` gets the
+  // bytes uploaded.
   uint32_t get(uint32_t index, const TextureSource& source, uint64_t& uploaded);
   uint64_t resident_bytes() const { return resident_bytes_; }
   uint64_t budget() const { return budget_; }
@@ -45,5 +47,7 @@ class MeshTextures {
 
 // Bytes a texture of w × h texels takes with its full mipmap chain (the chain adds a third).
 uint64_t texture_bytes(uint32_t width, uint32_t height);
+// Bytes a side × side texture needs while it is fetched (read, decoded) and uploaded.
+uint64_t texture_room(uint32_t side);
 
 }  // namespace cellwalk::render

@@ -1,32 +1,178 @@
-// Base-colour textures decoded with stb_image (scene/texture.hpp).
+// Base-colour textures (scene/texture.hpp): PNG through libpng's simplified API, JPEG through
+// libjpeg(-turbo); both are fuzzed upstream (OSS-Fuzz), and every size is checked here before
+// anything is allocated.
 #include "cellwalk/scene/texture.hpp"
 
+#include <jpeglib.h>
+#include <png.h>
+
 #include <algorithm>
-#include <climits>
+#include <csetjmp>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <utility>
 
 #include "cellwalk/core/error.hpp"
 
-// Static: other translation units (tinygltf's, if it ever decodes) may carry their own copy.
-#define STB_IMAGE_STATIC
-#define STB_IMAGE_IMPLEMENTATION
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#define STBI_NO_STDIO
-#include <stb/stb_image.h>
-
 namespace cellwalk {
 namespace {
 
-constexpr int kMaxDecodedSide = 8192;  // refused above this (256 MiB decoded): a damaged header, or a poster
+constexpr uint32_t kMaxDecodedSide = 8192;  // refused above this (256 MiB decoded): a damaged header, or a poster
+constexpr int kJpegQuality = 90;
 
-int checked_length(std::span<const uint8_t> encoded, std::string_view where) {
-  if (encoded.empty()) fail(where, "texture image is empty");
-  if (encoded.size() > size_t(INT_MAX)) fail(where, "texture image is larger than 2 GiB");
-  return int(encoded.size());
+bool is_png(std::span<const uint8_t> b) { return b.size() >= 8 && png_sig_cmp(b.data(), 0, 8) == 0; }
+bool is_jpeg(std::span<const uint8_t> b) { return b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF; }
+
+void check_size(uint32_t width, uint32_t height, std::string_view where) {
+  if (width == 0 || height == 0 || width > kMaxDecodedSide || height > kMaxDecodedSide)
+    fail(where, "texture is " + std::to_string(width) + " x " + std::to_string(height) +
+                    " texels; cellwalk reads 1 to " + std::to_string(kMaxDecodedSide) + " a side: scale it down");
 }
+
+// --- PNG ---------------------------------------------------------------------------------------
+
+struct PngImage {
+  png_image image{};
+  PngImage() { image.version = PNG_IMAGE_VERSION; }
+  ~PngImage() { png_image_free(&image); }
+};
+
+void begin_png(PngImage& png, std::span<const uint8_t> b, std::string_view where) {
+  if (!png_image_begin_read_from_memory(&png.image, b.data(), b.size()))
+    fail(where, std::string("PNG cannot be read (") + png.image.message + "); the image is damaged");
+  check_size(png.image.width, png.image.height, where);
+}
+
+Texture decode_png(std::span<const uint8_t> b, std::string_view where) {
+  PngImage png;
+  begin_png(png, b, where);
+  png.image.format = PNG_FORMAT_RGBA;
+  Texture t;
+  t.width = png.image.width;
+  t.height = png.image.height;
+  t.texels.resize(size_t(t.width) * t.height);
+  if (!png_image_finish_read(&png.image, nullptr, t.texels.data(), 0, nullptr))
+    fail(where, std::string("PNG cannot be decoded (") + png.image.message + "); the image is damaged");
+  return t;
+}
+
+std::vector<uint8_t> encode_png(const Texture& t, std::string_view where) {
+  PngImage png;
+  png.image.width = t.width;
+  png.image.height = t.height;
+  png.image.format = PNG_FORMAT_RGBA;
+  png_alloc_size_t size = 0;
+  if (!png_image_write_to_memory(&png.image, nullptr, &size, 0, t.texels.data(), 0, nullptr))
+    fail(where, std::string("PNG cannot be written: ") + png.image.message);
+  std::vector<uint8_t> out(size);
+  if (!png_image_write_to_memory(&png.image, out.data(), &size, 0, t.texels.data(), 0, nullptr))
+    fail(where, std::string("PNG cannot be written: ") + png.image.message);
+  out.resize(size);
+  return out;
+}
+
+// --- JPEG --------------------------------------------------------------------------------------
+
+// libjpeg reports errors through a callback that must not return: it jumps back to the setjmp
+// in the function that called libjpeg, which then throws. Only C objects live between the two.
+struct JpegErrors {
+  jpeg_error_mgr manager;
+  std::jmp_buf jump;
+  char message[JMSG_LENGTH_MAX];
+};
+
+[[noreturn]] void jpeg_error_exit(j_common_ptr info) {
+  auto* errors = reinterpret_cast<JpegErrors*>(info->err);
+  (*info->err->format_message)(info, errors->message);
+  std::longjmp(errors->jump, 1);
+}
+void jpeg_quiet(j_common_ptr, int) {}  // warnings (a truncated scan) decode what there is
+
+void init_errors(JpegErrors& errors) {
+  jpeg_std_error(&errors.manager);
+  errors.manager.error_exit = jpeg_error_exit;
+  errors.manager.emit_message = jpeg_quiet;
+  errors.message[0] = '\0';
+}
+
+// Decodes into `t` (declared by the caller, so no C++ object lives across the jump); returns
+// false with errors.message set on failure. With `header_only`, reads the size alone.
+bool jpeg_decode(std::span<const uint8_t> b, Texture& t, bool header_only, JpegErrors& errors) {
+  jpeg_decompress_struct info;
+  init_errors(errors);
+  info.err = &errors.manager;
+  if (setjmp(errors.jump)) {
+    jpeg_destroy_decompress(&info);
+    return false;
+  }
+  jpeg_create_decompress(&info);
+  jpeg_mem_src(&info, b.data(), static_cast<unsigned long>(b.size()));
+  jpeg_read_header(&info, TRUE);
+  t.width = info.image_width;
+  t.height = info.image_height;
+  if (header_only || t.width == 0 || t.height == 0 || t.width > kMaxDecodedSide || t.height > kMaxDecodedSide) {
+    jpeg_destroy_decompress(&info);
+    return true;
+  }
+  info.out_color_space = JCS_EXT_RGBA;
+  jpeg_start_decompress(&info);
+  t.texels.resize(size_t(t.width) * t.height);
+  while (info.output_scanline < info.output_height) {
+    JSAMPROW row = reinterpret_cast<JSAMPROW>(&t.texels[size_t(info.output_scanline) * t.width]);
+    jpeg_read_scanlines(&info, &row, 1);
+  }
+  jpeg_finish_decompress(&info);
+  jpeg_destroy_decompress(&info);
+  return true;
+}
+
+Texture decode_jpeg(std::span<const uint8_t> b, std::string_view where) {
+  Texture t;
+  JpegErrors errors;
+  if (!jpeg_decode(b, t, false, errors))
+    fail(where, std::string("JPEG cannot be decoded (") + errors.message + "); the image is damaged");
+  check_size(t.width, t.height, where);
+  return t;
+}
+
+bool jpeg_encode(const Texture& t, unsigned char*& buffer, unsigned long& size, JpegErrors& errors) {
+  jpeg_compress_struct info;
+  init_errors(errors);
+  info.err = &errors.manager;
+  if (setjmp(errors.jump)) {
+    jpeg_destroy_compress(&info);
+    return false;
+  }
+  jpeg_create_compress(&info);
+  jpeg_mem_dest(&info, &buffer, &size);
+  info.image_width = t.width;
+  info.image_height = t.height;
+  info.input_components = 4;
+  info.in_color_space = JCS_EXT_RGBA;
+  jpeg_set_defaults(&info);
+  jpeg_set_quality(&info, kJpegQuality, TRUE);
+  jpeg_start_compress(&info, TRUE);
+  while (info.next_scanline < info.image_height) {
+    JSAMPROW row = const_cast<JSAMPROW>(reinterpret_cast<const JSAMPLE*>(&t.texels[size_t(info.next_scanline) * t.width]));
+    jpeg_write_scanlines(&info, &row, 1);
+  }
+  jpeg_finish_compress(&info);
+  jpeg_destroy_compress(&info);
+  return true;
+}
+
+std::vector<uint8_t> encode_jpeg(const Texture& t, std::string_view where) {
+  unsigned char* buffer = nullptr;
+  unsigned long size = 0;
+  JpegErrors errors;
+  const bool ok = jpeg_encode(t, buffer, size, errors);
+  const std::unique_ptr<unsigned char, void (*)(void*)> owned(buffer, std::free);
+  if (!ok) fail(where, std::string("JPEG cannot be written: ") + errors.message);
+  return {buffer, buffer + size};
+}
+
+// --- levels ------------------------------------------------------------------------------------
 
 // The source texels [begin, end) along one axis that output texel i averages: two, and the
 // odd last one folded into the last output texel.
@@ -60,30 +206,43 @@ Texture halve(const Texture& in) {
 
 }  // namespace
 
-void check_texture(std::span<const uint8_t> encoded, std::string_view where) {
-  int w = 0, h = 0, channels = 0;
-  if (!stbi_info_from_memory(encoded.data(), checked_length(encoded, where), &w, &h, &channels))
-    fail(where, std::string("texture is not a PNG or JPEG cellwalk can read (") + stbi_failure_reason() +
-                    "); convert it to PNG or JPEG");
-  if (w <= 0 || h <= 0 || w > kMaxDecodedSide || h > kMaxDecodedSide)
-    fail(where, "texture is " + std::to_string(w) + " x " + std::to_string(h) +
-                    " texels; cellwalk reads up to " + std::to_string(kMaxDecodedSide) + " a side: scale it down");
+TextureInfo check_texture(std::span<const uint8_t> encoded, std::string_view where) {
+  if (encoded.empty()) fail(where, "texture image is empty");
+  TextureInfo info;
+  if (is_png(encoded)) {
+    PngImage png;
+    begin_png(png, encoded, where);
+    info = {TextureFormat::kPng, png.image.width, png.image.height};
+  } else if (is_jpeg(encoded)) {
+    Texture t;
+    JpegErrors errors;
+    if (!jpeg_decode(encoded, t, true, errors))
+      fail(where, std::string("JPEG cannot be read (") + errors.message + "); the image is damaged");
+    check_size(t.width, t.height, where);
+    info = {TextureFormat::kJpeg, t.width, t.height};
+  } else {
+    fail(where, "texture is neither a PNG nor a JPEG; convert it to one of them");
+  }
+  return info;
 }
 
 Texture decode_texture(std::span<const uint8_t> encoded, std::string_view where, uint32_t max_side) {
-  check_texture(encoded, where);
-  int w = 0, h = 0, channels = 0;
-  std::unique_ptr<stbi_uc, void (*)(void*)> pixels(
-      stbi_load_from_memory(encoded.data(), int(encoded.size()), &w, &h, &channels, 4), stbi_image_free);
-  if (!pixels) fail(where, std::string("texture cannot be decoded (") + stbi_failure_reason() + "); the image is damaged");
-  Texture t;
-  t.width = uint32_t(w);
-  t.height = uint32_t(h);
-  t.texels.resize(size_t(w) * size_t(h));
-  std::memcpy(t.texels.data(), pixels.get(), t.byte_size());
-  pixels.reset();
+  Texture t = check_texture(encoded, where).format == TextureFormat::kPng ? decode_png(encoded, where)
+                                                                          : decode_jpeg(encoded, where);
   while (t.width > std::max(1u, max_side) || t.height > std::max(1u, max_side)) t = halve(t);
   return t;
+}
+
+std::vector<TextureLevel> texture_levels(std::span<const uint8_t> encoded, std::string_view where) {
+  const TextureInfo info = check_texture(encoded, where);
+  std::vector<TextureLevel> levels;
+  levels.push_back({info.width, info.height, {encoded.begin(), encoded.end()}});
+  Texture t = decode_texture(encoded, where, kMaxDecodedSide);
+  while (t.width > 1 || t.height > 1) {
+    t = halve(t);
+    levels.push_back({t.width, t.height, info.format == TextureFormat::kPng ? encode_png(t, where) : encode_jpeg(t, where)});
+  }
+  return levels;
 }
 
 }  // namespace cellwalk

@@ -49,20 +49,33 @@ World::World(const std::string& path, WorldFile::Options options) : file_(path, 
         r.error("object's levels lie outside the level table");
     }
   }
-  if (file_.has_section(world_sections::kTextureTable)) {
-    const SectionInfo& s = file_.section(world_sections::kTextureTable);
-    auto bytes = file_.read(s, 0, s.bytes);
-    ByteReader r(bytes, path + ": section texture_table", 0);
-    if (s.bytes % world_sections::kTextureRecordBytes != 0) r.error("size is not a whole number of texture records");
-    const uint64_t image_bytes = file_.section(world_sections::kTextures).bytes;
-    textures_.resize(s.bytes / world_sections::kTextureRecordBytes);
-    for (auto& [offset, size] : textures_) {
-      offset = r.get<uint64_t>("texture offset");
-      size = r.get<uint32_t>("texture bytes");
-      r.get<uint32_t>("padding");
-      if (size == 0 || offset > image_bytes || size > image_bytes - offset)
-        r.error("texture points outside the textures section");
-    }
+  if (file_.has_section(world_sections::kTextureTable)) read_texture_table();
+}
+
+void World::read_texture_table() {
+  const SectionInfo& s = file_.section(world_sections::kTextureTable);
+  auto bytes = file_.read(s, 0, s.bytes);
+  ByteReader r(bytes, file_.path() + ": section texture_table", 0);
+  const uint32_t count = r.get<uint32_t>("texture count"), level_count = r.get<uint32_t>("level count");
+  if (uint64_t(count) * world_sections::kTextureRecordBytes +
+          uint64_t(level_count) * world_sections::kTextureLevelRecordBytes != r.remaining())
+    r.error("size does not match its texture and level counts");
+  textures_.resize(count);
+  for (auto& [first, n] : textures_) {
+    first = r.get<uint32_t>("first level");
+    n = r.get<uint32_t>("level count");
+    if (n == 0 || first > level_count || n > level_count - first) r.error("texture's levels lie outside the level table");
+  }
+  const uint64_t image_bytes = file_.section(world_sections::kTextures).bytes;
+  texture_levels_.resize(level_count);
+  for (TextureLevelRecord& l : texture_levels_) {
+    l.offset = r.get<uint64_t>("level offset");
+    l.bytes = r.get<uint32_t>("level bytes");
+    l.width = r.get<uint32_t>("level width");
+    l.height = r.get<uint32_t>("level height");
+    r.get<uint32_t>("padding");
+    if (l.bytes == 0 || l.offset > image_bytes || l.bytes > image_bytes - l.offset)
+      r.error("texture level points outside the textures section");
   }
 }
 
@@ -99,16 +112,35 @@ Mesh World::decode_level(ObjectId id, uint32_t level, std::span<const uint8_t> b
   return mesh;
 }
 
-std::vector<uint8_t> World::read_texture(uint32_t index) const {
+void World::check_texture_index(uint32_t index) const {
   if (index >= textures_.size())
     fail(file_.path(), "texture " + std::to_string(index) + " does not exist (the world has " +
                            std::to_string(textures_.size()) + ")");
-  const auto [offset, size] = textures_[index];
-  return file_.read(file_.section(world_sections::kTextures), offset, size);
+}
+
+std::vector<uint8_t> World::read_texture(uint32_t index) const {
+  check_texture_index(index);
+  const TextureLevelRecord& l = texture_levels_[textures_[index].first];
+  return file_.read(file_.section(world_sections::kTextures), l.offset, l.bytes);
 }
 
 Texture World::load_texture(uint32_t index, uint32_t max_side) const {
-  return decode_texture(read_texture(index), file_.path() + ": texture " + std::to_string(index), max_side);
+  check_texture_index(index);
+  const auto [first, n] = textures_[index];
+  uint32_t chosen = first + n - 1;  // the 1 × 1 level when none is smaller than asked
+  for (uint32_t l = first; l < first + n; ++l)
+    if (texture_levels_[l].width <= max_side && texture_levels_[l].height <= max_side) {
+      chosen = l;
+      break;
+    }
+  const TextureLevelRecord& level = texture_levels_[chosen];
+  const std::string where = file_.path() + ": texture " + std::to_string(index) + " level " + std::to_string(chosen - first);
+  Texture t = decode_texture(file_.read(file_.section(world_sections::kTextures), level.offset, level.bytes), where,
+                             std::max(level.width, level.height));
+  if (t.width != level.width || t.height != level.height)
+    fail(where, "decodes to " + std::to_string(t.width) + " x " + std::to_string(t.height) + ", the table says " +
+                    std::to_string(level.width) + " x " + std::to_string(level.height) + " (the file is damaged: rebuild it)");
+  return t;
 }
 
 std::vector<std::string> World::object_names() const {
@@ -123,7 +155,7 @@ std::vector<std::string> World::object_names() const {
 
 uint64_t World::resident_bytes() const {
   return objects_.capacity() * sizeof(ObjectRecord) + lods_.capacity() * sizeof(LodRecord) +
-         textures_.capacity() * sizeof(textures_[0]) +
+         textures_.capacity() * sizeof(textures_[0]) + texture_levels_.capacity() * sizeof(TextureLevelRecord) +
          file_.resident_bytes() + info_.nav.nodes.size() * sizeof(Vec3) + info_.nav.edges.size() * 8;
 }
 

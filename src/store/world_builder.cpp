@@ -84,20 +84,36 @@ std::span<const uint8_t> as_bytes(const std::string& s) {
   return {reinterpret_cast<const uint8_t*>(s.data()), s.size()};
 }
 
-// The scene's textures, as their image files, one after another, and their table. A world
-// without textures has neither section (a section of no bytes has no page).
+// The scene's textures, each as its levels' image files (texture_levels), one after another,
+// and their table. A world without textures has neither section (a section of no bytes has no
+// page).
 void write_textures(const SceneReader& scene, WorldWriter& writer) {
   if (scene.texture_count() == 0) return;
-  ByteWriter table;
+  ByteWriter textures, levels;
+  uint32_t level_count = 0;
   writer.begin_section(world_sections::kTextures);
   for (uint32_t i = 0; i < scene.texture_count(); ++i) {
     const TextureImage texture = scene.read_texture(i);
-    table.put(writer.section_offset());
-    table.put(uint32_t(texture.encoded.size()));
-    table.put(uint32_t{0});
-    writer.write(texture.encoded);
+    const std::vector<TextureLevel> made =
+        texture_levels(texture.encoded, scene.path() + ": texture " + std::to_string(i) + " (" + texture.name + ")");
+    textures.put(level_count);
+    textures.put(uint32_t(made.size()));
+    level_count += uint32_t(made.size());
+    for (const TextureLevel& level : made) {
+      levels.put(writer.section_offset());
+      levels.put(uint32_t(level.encoded.size()));
+      levels.put(level.width);
+      levels.put(level.height);
+      levels.put(uint32_t{0});
+      writer.write(level.encoded);
+    }
   }
   writer.end_section();
+  ByteWriter table;
+  table.put(uint32_t(scene.texture_count()));
+  table.put(level_count);
+  table.put_array(std::span<const uint8_t>(textures.bytes()));
+  table.put_array(std::span<const uint8_t>(levels.bytes()));
   writer.begin_section(world_sections::kTextureTable);
   writer.write(table.bytes());
   writer.end_section();

@@ -84,11 +84,12 @@ class World {
   std::vector<uint8_t> read_level(ObjectId id, uint32_t level) const;
   Mesh decode_level(ObjectId id, uint32_t level, std::span<const uint8_t> bytes) const;
 
-  // Base-colour textures: how many the world has, and one's image file (PNG or JPEG, verified
-  // pages; decode it with decode_texture). Meshes name them by index (Mesh::texture).
+  // Base-colour textures: how many the world has, and one's image file as imported (PNG or
+  // JPEG, verified pages). Meshes name them by index (Mesh::texture).
   size_t texture_count() const { return textures_.size(); }
   std::vector<uint8_t> read_texture(uint32_t index) const;
-  // read_texture and decode_texture: texture `index`, its larger side at most max_side.
+  // Texture `index` decoded from the largest of its levels (texture_levels) whose sides are at
+  // most max_side: only that level's bytes are read and decoded.
   Texture load_texture(uint32_t index, uint32_t max_side) const;
 
   // The objects' names, in id order, read from the file on each call (the directory does not
@@ -103,7 +104,14 @@ class World {
   std::string params_json_;
   std::vector<ObjectRecord> objects_;
   std::vector<LodRecord> lods_;
-  std::vector<std::pair<uint64_t, uint32_t>> textures_;  // offset in the textures section, bytes
+  void read_texture_table();
+  void check_texture_index(uint32_t index) const;
+  struct TextureLevelRecord {
+    uint64_t offset = 0;  // in the textures section
+    uint32_t bytes = 0, width = 0, height = 0;
+  };
+  std::vector<std::pair<uint32_t, uint32_t>> textures_;  // first level, level count
+  std::vector<TextureLevelRecord> texture_levels_;
 };
 
 }  // namespace cellwalk
