@@ -424,6 +424,12 @@ TEST(GenerateCommand, WritesSceneAndPrintsCounts) {
 
   EXPECT_NE(test::run_cellwalk("generate grid -o " + dir.file("g.cwscene")).exit_code,
             0);  // --mesh is required
+  // A textured model placed by a generator is drawn in colour (a generated scene has no
+  // textures): its merged mesh once kept the texture and the scene refused it.
+  const auto textured = test::run_cellwalk("generate grid --mesh " + test::assimp_model("glTF2/BoxTextured-glTF-Binary/BoxTextured.glb") +
+                                           " --nx 2 --nz 1 -o " + dir.file("t.cwscene"));
+  ASSERT_EQ(textured.exit_code, 0) << textured.output;
+  EXPECT_EQ(SceneReader(dir.file("t.cwscene")).read_object(0).mesh.texture, kNoTexture);
 }
 
 }  // namespace

@@ -477,6 +477,36 @@ TEST(ImportErrors, GltfIndicesOfAFloatTypeAreRefused) {
 // A node scaled to zero (how some exporters hide one) has no normal matrix; its normals are
 // recomputed rather than turned into NaN, so the file still imports. A node that scales the
 // triangle past the coordinate bound is refused like a vertex written there.
+// An image whose buffer view runs past its buffer: tinygltf hands such a view over unchecked, so
+// cellwalk reads a view's image bytes only after checking its bounds. The mesh imports
+// untextured and nothing past the buffer is read (the ASan build checks that).
+TEST(ImportGltf, ImageViewPastItsBufferLeavesTheMeshUntextured) {
+  const nlohmann::json patch = {
+      {"meshes",
+       {{{"primitives", {{{"attributes", {{"POSITION", 0}, {"NORMAL", 1}, {"TEXCOORD_0", 3}}}, {"indices", 2}, {"material", 0}}}}}}},
+      {"materials", {{{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}}}}},
+      {"textures", {{{"source", 0}}}},
+      {"images", {{{"bufferView", 3}, {"mimeType", "image/png"}}}},
+      {"bufferViews",
+       {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", 36}},
+        {{"buffer", 0}, {"byteOffset", 36}, {"byteLength", 36}},
+        {{"buffer", 0}, {"byteOffset", 72}, {"byteLength", 12}},
+        {{"buffer", 0}, {"byteOffset", 8}, {"byteLength", 1 << 20}}}},
+      {"accessors",
+       {{{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
+        {{"bufferView", 1}, {"componentType", 5126}, {"count", 3}, {"type", "VEC3"}},
+        {{"bufferView", 2}, {"componentType", 5125}, {"count", 3}, {"type", "SCALAR"}},
+        {{"bufferView", 0}, {"componentType", 5126}, {"count", 3}, {"type", "VEC2"}}}}};
+  try {
+    const ImportedModel model = parse_model(ModelFormat::kGltf, triangle_glb({0, 0, 1, 0, 0, 1, 0, 0, 1}, 5125, {{"mesh", 0}}, patch), "view.glb");
+    EXPECT_TRUE(model.textures.empty());
+    ASSERT_EQ(model.objects.size(), 1u);
+    EXPECT_EQ(model.objects[0].mesh.texture, kNoTexture);
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("view.glb"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ImportGltf, NodeTransformsKeepNormalsFiniteAndPositionsBounded) {
   const std::array<float, 9> up = {0, 0, 1, 0, 0, 1, 0, 0, 1};
   const auto hidden = parse_model(ModelFormat::kGltf, triangle_glb(up, 5123, {{"mesh", 0}, {"scale", {0, 0, 0}}}), "test.glb").objects;

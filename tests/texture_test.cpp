@@ -93,19 +93,24 @@ TEST(Texture, DamagedOrForeignImagesGiveAnErrorNamingThem) {
 TEST(TextureImport, ObjMapKdAndFlippedTextureCoordinates) {
   TempDir dir;
   const std::vector<uint8_t> a = gradient_png(dir, "a.png", 4, 4), b = gradient_png(dir, "b.png", 2, 2);
-  std::ofstream(dir.file("m.mtl")) << "newmtl A\nKd 1 1 1\nmap_Kd -s 1 1 1 a.png\nnewmtl B\nmap_Kd .\\b.png\n"
-                                      "newmtl Gone\nmap_Kd missing.png\n";
+  // The truncated PNG's header reads, its pixels do not: import decodes it whole and drops it.
+  test::spit(dir.file("cut.png"), {a.begin(), a.begin() + 60});
+  std::ofstream(dir.file("m.mtl")) << "newmtl A\nKd 0.5 0.5 0.5\nmap_Kd -s 1 1 1 a.png\nnewmtl B\nmap_Kd .\\b.png\n"
+                                      "newmtl Gone\nmap_Kd missing.png\nnewmtl Cut\nmap_Kd cut.png\n";
   std::ofstream(dir.file("m.obj")) << "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\n"
                                       "vt 0 0\nvt 1 0\nvt 0 1\nvt 1 1\n"
                                       "g g\nusemtl A\nf 1/1 2/2 3/3\nusemtl B\nf 2/2 4/4 3/3\n"
-                                      "g h\nusemtl A\nf 1 2 3\ng k\nusemtl Gone\nf 1/1 2/2 3/3\n";
+                                      "g h\nusemtl A\nf 1 2 3\ng k\nusemtl Gone\nf 1/1 2/2 3/3\n"
+                                      "g m\nusemtl A\nf 1/1 2/2 3/3\nf 2 4 3\ng c\nusemtl Cut\nf 1/1 2/2 3/3\n";
   const ImportedModel model = import_model(dir.file("m.obj"));
   ASSERT_EQ(model.textures.size(), 2u);
   EXPECT_EQ(model.textures[0].encoded, a);
   EXPECT_EQ(model.textures[1].encoded, b);
-  ASSERT_EQ(model.objects.size(), 4u);
+  ASSERT_EQ(model.objects.size(), 7u);
   EXPECT_EQ(model.objects[0].name, "g/A");
   EXPECT_EQ(model.objects[1].name, "g/B");
+  EXPECT_EQ(model.objects[0].color, rgba8(128, 128, 128));  // Kd multiplies the texture
+  EXPECT_EQ(model.objects[1].color, rgba8(255, 255, 255));  // no Kd: the texture as it is
   // Each corner's uv is its vt's (u, 1 − v): vt k was given for position k here.
   const Vec2 vt[4] = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
   for (int k = 0; k < 2; ++k) {
@@ -120,6 +125,13 @@ TEST(TextureImport, ObjMapKdAndFlippedTextureCoordinates) {
   EXPECT_EQ(model.objects[2].mesh.texture, kNoTexture);  // no vt
   EXPECT_TRUE(model.objects[2].mesh.uvs.empty());
   EXPECT_EQ(model.objects[3].mesh.texture, kNoTexture);  // its image is missing
+  // Group m: its face with vt is textured, its face without is a part of its own, untextured.
+  EXPECT_EQ(model.objects[4].name, "m/A");
+  EXPECT_EQ(model.objects[4].mesh.texture, 0u);
+  EXPECT_EQ(model.objects[4].mesh.triangle_count(), 1u);
+  EXPECT_EQ(model.objects[5].mesh.texture, kNoTexture);
+  EXPECT_EQ(model.objects[5].mesh.triangle_count(), 1u);
+  EXPECT_EQ(model.objects[6].mesh.texture, kNoTexture);  // its image is damaged
   // From memory nothing beside the model is read.
   EXPECT_TRUE(parse_model(ModelFormat::kObj, test::slurp(dir.file("m.obj")), "m.obj").textures.empty());
   // A real file: the spider names its JPEGs as ".\x.jpg".

@@ -37,12 +37,6 @@ FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& ca
   return stats;
 }
 
-void use_world_textures(Renderer& renderer, const World& world) {
-  if (world.texture_count() == 0) return;
-  renderer.set_texture_source(
-      [&world](uint32_t index, uint32_t max_side) -> std::optional<Texture> { return world.load_texture(index, max_side); });
-}
-
 std::vector<FrameStats> walk(const CameraPath& path, const Camera& lens, Strategy& strategy,
                              Renderer& renderer, const ProgressFn& progress) {
   std::vector<FrameStats> frames;

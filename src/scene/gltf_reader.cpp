@@ -149,11 +149,23 @@ tinygltf::FsCallbacks file_callbacks(FileAccess& access) {
 }
 
 // Images are kept as their file's bytes (PNG, JPEG), not decoded: scenes store textures
-// compressed (scene/texture.hpp). tinygltf hands over the bytes of a buffer view or data URI.
+// compressed (scene/texture.hpp). tinygltf hands over a data URI's bytes here; a buffer view's
+// are read later, by image_bytes, after its bounds are checked (tinygltf does not check them
+// before calling this).
 bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
                       const unsigned char* bytes, int size, void*) {
-  image->image.assign(bytes, bytes + size);
+  if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
   return true;
+}
+
+// The bytes of buffer view `index`, or nullopt when it does not lie inside its buffer.
+std::optional<std::span<const uint8_t>> view_bytes(const tinygltf::Model& m, int index) {
+  if (index < 0 || size_t(index) >= m.bufferViews.size()) return std::nullopt;
+  const tinygltf::BufferView& bv = m.bufferViews[index];
+  if (bv.buffer < 0 || size_t(bv.buffer) >= m.buffers.size()) return std::nullopt;
+  const std::vector<unsigned char>& data = m.buffers[bv.buffer].data;
+  if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset || bv.byteLength == 0) return std::nullopt;
+  return std::span<const uint8_t>(data.data() + bv.byteOffset, bv.byteLength);
 }
 
 std::string first_line(std::string s) {
@@ -379,18 +391,19 @@ std::optional<TextureImage> image_bytes(const tinygltf::Model& m, int i, const s
                                         const std::string& base_dir) {
   const tinygltf::Image& image = m.images[i];
   const std::string label = !image.name.empty() ? image.name : !image.uri.empty() ? image.uri : "image " + std::to_string(i);
-  if (!image.image.empty()) {
-    TextureImage t{label, {image.image.begin(), image.image.end()}};
-    try {
-      check_texture(t.encoded, name + ": " + label);
-      return t;
-    } catch (const Error& e) {
-      std::fprintf(stderr, "note: %s; its meshes are drawn untextured\n", e.what());
+  std::span<const uint8_t> bytes = image.image;
+  if (image.bufferView >= 0) {
+    const std::optional<std::span<const uint8_t>> view = view_bytes(m, image.bufferView);
+    if (!view) {
+      std::fprintf(stderr, "note: %s: %s lies outside its buffer; its meshes are drawn untextured\n", name.c_str(), label.c_str());
       return std::nullopt;
     }
+    bytes = *view;
+  } else if (bytes.empty()) {
+    if (image.uri.empty() || image.uri.starts_with("data:")) return std::nullopt;
+    return read_texture_file(image.uri, base_dir, name);
   }
-  if (image.uri.empty() || image.uri.starts_with("data:")) return std::nullopt;
-  return read_texture_file(image.uri, base_dir, name);
+  return checked_texture({label, {bytes.begin(), bytes.end()}}, name + ": " + label);
 }
 
 TextureTable texture_table(const tinygltf::Model& m, const std::string& name, const std::string& base_dir) {

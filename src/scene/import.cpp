@@ -53,26 +53,35 @@ void finish_object(Object& object, const std::string& name) {
   object.bounds = bounds_of(object.mesh);
 }
 
+std::optional<TextureImage> checked_texture(TextureImage texture, const std::string& where) {
+  try {
+    verify_texture(texture.encoded, where);
+    return texture;
+  } catch (const Error& e) {
+    std::fprintf(stderr, "note: %s; its meshes are drawn untextured\n", e.what());
+    return std::nullopt;
+  }
+}
+
 std::optional<TextureImage> read_texture_file(const std::string& uri, const std::string& base_dir,
                                               const std::string& model) {
   if (base_dir.empty()) return std::nullopt;
   const std::filesystem::path file = (std::filesystem::path(base_dir) / uri).lexically_normal();
   const auto rel = file.lexically_relative(base_dir);
-  std::string problem;
   if (rel.empty() || *rel.begin() == "..") {
-    problem = "lies outside the model's folder";
-  } else {
-    try {
-      TextureImage t{file.filename().string(), read_whole_file(file.string())};
-      check_texture(t.encoded, file.string());
-      return t;
-    } catch (const Error& e) {
-      problem = e.what();
-    }
+    std::fprintf(stderr, "note: %s: texture '%s' lies outside the model's folder; its meshes are drawn untextured\n",
+                 model.c_str(), uri.c_str());
+    return std::nullopt;
   }
-  std::fprintf(stderr, "note: %s: texture '%s' not read (%s); its meshes are drawn untextured\n", model.c_str(),
-               uri.c_str(), problem.c_str());
-  return std::nullopt;
+  std::vector<uint8_t> bytes;
+  try {
+    bytes = read_whole_file(file.string());
+  } catch (const Error& e) {
+    std::fprintf(stderr, "note: %s: texture '%s' not read (%s); its meshes are drawn untextured\n", model.c_str(),
+                 uri.c_str(), e.what());
+    return std::nullopt;
+  }
+  return checked_texture({file.filename().string(), std::move(bytes)}, file.string());
 }
 
 void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon) {

@@ -9,6 +9,7 @@
 // and curves. vt's v runs up the image; cellwalk's uvs run down it (as glTF's), so v is flipped.
 #include <algorithm>
 #include <array>
+#include <cstdio>
 #include <optional>
 #include <filesystem>
 #include <map>
@@ -34,6 +35,7 @@ struct Material {
   std::string name;
   Rgba8 color = Object{}.color;
   std::string texture_file;  // map_Kd; empty for none
+  bool has_kd = false;       // without Kd, a textured material shows its texture as it is (white)
 };
 
 struct ObjState {
@@ -158,6 +160,7 @@ void read_mtl(Bytes bytes, const std::string& name, ObjState& s) {
         v = in.to_double(t, "a colour value");
       }
       s.materials[current].color = rgba8(color_channel(c[0], 1.0), color_channel(c[1], 1.0), color_channel(c[2], 1.0));
+      s.materials[current].has_kd = true;
     } else if (key == "map_Kd" && current != kNoMaterial) {
       // Options ("-s 1 1 1", "-clamp on") come first; the file is the last token.
       std::string_view file;
@@ -167,6 +170,7 @@ void read_mtl(Bytes bytes, const std::string& name, ObjState& s) {
       std::string path(file);
       std::replace(path.begin(), path.end(), '\\', '/');
       s.materials[current].texture_file = path;
+      if (!s.materials[current].has_kd) s.materials[current].color = rgba8(255, 255, 255);
     }
     in.next_line();
   }
@@ -213,14 +217,23 @@ uint32_t texture_of(uint32_t m, ObjState& s, const std::string& base_dir, const 
 std::vector<std::pair<Group, uint32_t>> parts_by_texture(const Group& g, ObjState& s, const std::string& base_dir,
                                                          const std::string& model) {
   std::map<uint32_t, Group> parts;
+  size_t without_vt = 0;
   for (size_t t = 0; t < g.materials.size(); ++t) {
-    const uint32_t texture = texture_of(g.materials[t], s, base_dir, model);
+    uint32_t texture = texture_of(g.materials[t], s, base_dir, model);
+    const auto corner_uvs = g.uv_corners.begin() + 3 * t;
+    if (texture != kNoTexture && std::find(corner_uvs, corner_uvs + 3, kNoUv) != corner_uvs + 3) {
+      texture = kNoTexture;  // nothing to say where on the texture the face lies
+      ++without_vt;
+    }
     Group& part = parts[texture];
     if (part.name.empty()) part.name = g.name;
     part.corners.insert(part.corners.end(), g.corners.begin() + 3 * t, g.corners.begin() + 3 * t + 3);
     part.uv_corners.insert(part.uv_corners.end(), g.uv_corners.begin() + 3 * t, g.uv_corners.begin() + 3 * t + 3);
     part.materials.push_back(g.materials[t]);
   }
+  if (without_vt > 0)
+    std::fprintf(stderr, "note: %s: group %s: %zu faces of a textured material have no vt; they are drawn untextured\n",
+                 model.c_str(), g.name.c_str(), without_vt);
   std::vector<std::pair<Group, uint32_t>> out;
   for (auto& [texture, part] : parts) {
     if (parts.size() > 1 && texture != kNoTexture) part.name += "/" + s.materials[part.materials.front()].name;
@@ -231,13 +244,12 @@ std::vector<std::pair<Group, uint32_t>> parts_by_texture(const Group& g, ObjStat
 
 // The object of a group's part that shows `texture`: its own vertices in the file's order (one
 // per position, material when it has several, and texture coordinate when it is textured),
-// unfinished. A textured part with a corner without vt is drawn untextured.
+// unfinished. REQUIRES: every corner of a textured part has a vt (parts_by_texture).
 Object object_of(const Group& g, const ObjState& s, uint32_t texture) {
   bool several = false;
   for (uint32_t m : g.materials) several |= m != g.materials.front();
   const bool vertex_colors = s.colored == s.positions.size() && s.colored > 0;
-  const bool textured =
-      texture != kNoTexture && std::find(g.uv_corners.begin(), g.uv_corners.end(), kNoUv) == g.uv_corners.end();
+  const bool textured = texture != kNoTexture;
   Object object;
   object.name = g.name;
   if (g.materials.front() != kNoMaterial) object.color = s.materials[g.materials.front()].color;

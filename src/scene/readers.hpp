@@ -39,6 +39,9 @@ ImportedModel read_gltf(Bytes bytes, const std::string& name, ObjectId first_id,
 std::optional<TextureImage> read_texture_file(const std::string& uri, const std::string& base_dir,
                                               const std::string& model);
 
+// `texture` when it decodes whole (verify_texture), else nullopt with a note naming `where`.
+std::optional<TextureImage> checked_texture(TextureImage texture, const std::string& where);
+
 // A glTF (JSON, or GLB when `glb`) whose buffer views use EXT_meshopt_compression (or
 // KHR_meshopt_compression) as an equivalent GLB with those views decoded into one binary
 // chunk and the extension removed; empty when no view is compressed (gltf_meshopt.cpp).

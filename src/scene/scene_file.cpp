@@ -216,8 +216,8 @@ SceneReader::SceneReader(std::string path) : path_(std::move(path)) {
     uint32_t version;
     std::memcpy(&version, header.data() + 8, 4);
     if (version != kVersion && version != 1)
-      fail(path_ + "@8", "scene format version " + std::to_string(version) + ", this cellwalk reads " +
-                             std::to_string(kVersion));
+      fail(path_ + "@8", "scene format version " + std::to_string(version) + ", this cellwalk reads 1 and " +
+                             std::to_string(kVersion) + ": import or generate the scene again with this cellwalk");
     auto trailer_bytes = pread_exact(fd_, path_, file_size - kTrailerBytes, kTrailerBytes);
     ByteReader t(trailer_bytes, path_, file_size - kTrailerBytes);
     const uint64_t footer_offset = t.get<uint64_t>("footer offset");

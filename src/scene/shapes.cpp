@@ -198,6 +198,9 @@ void paint(Mesh& mesh, Rgba8 color) {
 Mesh unit_model(std::vector<Object> objects, const std::string& where) {
   Mesh merged;
   for (Object& o : objects) append(merged, o.mesh);
+  // Generated scenes carry no texture table: a model placed by a generator is drawn in colour.
+  merged.uvs.clear();
+  merged.texture = kNoTexture;
   if (merged.triangle_count() == 0) fail(where, "the model has no triangles");
   if (merged.normals.empty()) compute_normals(merged);
   const Aabb box = bounds_of(merged);

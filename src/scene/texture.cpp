@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <csetjmp>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
@@ -89,6 +90,20 @@ struct JpegErrors {
 }
 void jpeg_quiet(j_common_ptr, int) {}  // warnings (a truncated scan) decode what there is
 
+// A progressive JPEG of thousands of scans costs a pass over the image each: real ones have
+// about ten, so more than kMaxJpegScans is refused (libjpeg-turbo's own fuzzers do the same).
+constexpr int kMaxJpegScans = 500;
+void jpeg_count_scans(j_common_ptr info) {
+  if (info->is_decompressor) {
+    auto* d = reinterpret_cast<j_decompress_ptr>(info);
+    if (d->input_scan_number > kMaxJpegScans) {
+      std::snprintf(reinterpret_cast<JpegErrors*>(info->err)->message, JMSG_LENGTH_MAX, "more than %d scans",
+                    kMaxJpegScans);
+      std::longjmp(reinterpret_cast<JpegErrors*>(info->err)->jump, 1);
+    }
+  }
+}
+
 void init_errors(JpegErrors& errors) {
   jpeg_std_error(&errors.manager);
   errors.manager.error_exit = jpeg_error_exit;
@@ -107,6 +122,10 @@ bool jpeg_decode(std::span<const uint8_t> b, Texture& t, bool header_only, JpegE
     return false;
   }
   jpeg_create_decompress(&info);
+  jpeg_progress_mgr progress{};
+  progress.progress_monitor = jpeg_count_scans;
+  info.progress = &progress;
+  info.mem->max_memory_to_use = 512L << 20;
   jpeg_mem_src(&info, b.data(), static_cast<unsigned long>(b.size()));
   jpeg_read_header(&info, TRUE);
   t.width = info.image_width;
@@ -224,6 +243,10 @@ TextureInfo check_texture(std::span<const uint8_t> encoded, std::string_view whe
     fail(where, "texture is neither a PNG nor a JPEG; convert it to one of them");
   }
   return info;
+}
+
+void verify_texture(std::span<const uint8_t> encoded, std::string_view where) {
+  check_texture(encoded, where).format == TextureFormat::kPng ? decode_png(encoded, where) : decode_jpeg(encoded, where);
 }
 
 Texture decode_texture(std::span<const uint8_t> encoded, std::string_view where, uint32_t max_side) {

@@ -10,6 +10,7 @@
 #include "cellwalk/strategy/frame_stats.hpp"
 #include "cellwalk/render/renderer.hpp"
 #include "cellwalk/strategy/strategy.hpp"
+#include "cellwalk/strategy/world_textures.hpp"
 
 namespace cellwalk {
 
@@ -25,10 +26,6 @@ using ProgressFn = std::function<void(size_t, size_t)>;
 FrameStats render_frame(Strategy& strategy, Renderer& renderer, const Camera& camera, double time = 0.0,
                         std::vector<DrawItem>* drawn = nullptr, const Camera* render_from = nullptr,
                         const std::function<void(std::vector<DrawItem>&)>& adjust = {});
-
-// Gives `renderer` the world's textures (World::load_texture) when it has any, so textured
-// meshes are drawn textured. REQUIRES: `world` outlives the renderer's use of them.
-void use_world_textures(Renderer& renderer, const World& world);
 
 // Replays every frame of `path`. The camera's lens (fov, aspect, near, far) comes from `lens`.
 std::vector<FrameStats> walk(const CameraPath& path, const Camera& lens, Strategy& strategy,

@@ -27,7 +27,7 @@ struct ImportedModel {
 
 // Parses a model held in memory. `name` is used in error messages and object names.
 // glTF files give one object per triangle primitive (node transforms applied), OBJ files one
-// per o/g group and textured material; the others give one object. Objects get ids first_id,
+// per o/g group and texture its materials show; the others give one object. Objects get ids first_id,
 // first_id + 1, ...; normals are computed when absent. Textures: glTF's baseColorTexture (with
 // its TEXCOORD_n) and OBJ's map_Kd (with vt), from the file itself or, when read from a file,
 // image files beside it; parsing from memory reads no other file, and a texture it cannot

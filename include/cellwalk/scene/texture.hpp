@@ -42,6 +42,10 @@ struct TextureInfo {
 // 8192 texels a side. Throws Error naming `where` and what to do.
 TextureInfo check_texture(std::span<const uint8_t> encoded, std::string_view where);
 
+// Decodes the whole image and discards it: what import checks, so a texture that is accepted
+// into a scene also builds into a world. Throws Error naming `where`.
+void verify_texture(std::span<const uint8_t> encoded, std::string_view where);
+
 // Decodes to RGBA8 (libpng, libjpeg) and halves (2 × 2 box filter, an odd last row or column
 // folded into the one before) until neither side exceeds max_side. Throws Error naming `where`
 // for an image that is damaged or not PNG/JPEG.

@@ -1,5 +1,6 @@
 // Stratified thesis §3.1.2, Fig. 3-3, §5.2.3 (digest 002 §3.6): far-field baking, every non-near
 // object rendered from the cell centre onto the box faces.
+#include "cellwalk/strategy/world_textures.hpp"
 #include "cellwalk/systems/stratified/far_field.hpp"
 
 #include <algorithm>
@@ -90,6 +91,7 @@ struct FarFieldBaker::Impl {
     settings.background = kEmpty;
     settings.gpu_budget_bytes = budget;
     renderer = std::make_unique<Renderer>(settings);
+    use_world_textures(*renderer, world);  // far faces show what near geometry shows
     far_plane = 2.0f * glm::length(world.info().bounds.size()) + 10.0f;
   }
 
