@@ -29,7 +29,6 @@ class MeshTextures {
   // bytes uploaded.
   uint32_t get(uint32_t index, const TextureSource& source, uint64_t& uploaded);
   uint64_t resident_bytes() const { return resident_bytes_; }
-  uint64_t budget() const { return budget_; }
 
  private:
   void evict_least_recent();

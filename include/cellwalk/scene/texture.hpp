@@ -24,7 +24,6 @@ struct Texture {
   uint32_t width = 0;
   uint32_t height = 0;
   std::vector<Rgba8> texels;
-  size_t byte_size() const { return texels.size() * sizeof(Rgba8); }
 };
 
 // The larger side a decoded texture keeps by default: larger images are halved until they fit,
