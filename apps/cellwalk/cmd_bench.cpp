@@ -88,6 +88,7 @@ void register_bench(CLI::App& root) {
   register_bench_lichiang(*bench, command_line);
   register_bench_vdr(*bench, command_line);
   register_bench_disk_order(*bench, command_line);
+  register_bench_import(*bench, command_line);
   register_bench_pvs_stream(*bench, command_line);
 }
 

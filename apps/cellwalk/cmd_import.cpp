@@ -1,10 +1,11 @@
 // `cellwalk import FILE... -o OUT.cwscene [--scale S] [--up y|z] [--offset X,Y,Z] [--place grid]
-// [--patch-triangles N] [--obj X.obj] [--gltf X.gltf] [--json]`: reads model files (OBJ, PLY,
-// OFF, glTF/GLB) one at a time into a scene file, places them, splits large meshes into
+// [--patch-triangles N] [--memory MIB] [--stream] [--temp-dir DIR] [--obj X.obj] [--gltf X.gltf] [--json]`: reads model files (OBJ, PLY,
+// OFF, glTF/GLB) one at a time into a scene file (a PLY larger than memory streamed), places them, splits large meshes into
 // patches, optionally also exports OBJ/glTF for inspection, and gives the scene a walkable
 // loop around the models.
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
@@ -13,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/core/process_memory.hpp"
 #include "cellwalk/scene/import.hpp"
 #include "cellwalk/scene/scene_file.hpp"
 #include "checks.hpp"
@@ -34,6 +36,9 @@ struct ImportOptions {
   std::vector<float> offset;
   std::string place = "as-is";
   size_t patch_triangles = 16384;
+  double memory_mib = 1024;
+  bool stream = false;
+  std::string temp_dir;
 };
 
 // --place grid: models side by side in rows of ceil(sqrt(n)), each standing on y = 0, a fifth
@@ -94,7 +99,45 @@ NavGraph loop_around(const Aabb& bounds) {
   return nav;
 }
 
+// Counts and bounds of what went into the scene, as objects are added.
+struct ImportTally {
+  SceneCounts counts;
+  Aabb bounds;
+  uint64_t skipped = 0, split = 0, textures = 0, streamed = 0;
+
+  void add(Object& object, ObjectSink& out) {
+    // Ids stay dense over the objects kept.
+    object.id = static_cast<ObjectId>(counts.objects);
+    bounds.extend(object.bounds);
+    counts.count(object);
+    out.add(object);
+  }
+};
+
+// A model larger than memory: read into scratch files and handed on patch by patch, placed as
+// place_model places a model read whole.
+void import_streamed(const std::string& file, const ImportOptions& opt, GridPlacer& grid, ObjectSink& out,
+                     ImportTally& tally) {
+  Placement turn = opt.placement;
+  turn.offset = Vec3(0.0f);
+  StreamLimits limits;
+  limits.memory_bytes = uint64_t(opt.memory_mib * 1024 * 1024);
+  limits.patch_triangles = opt.patch_triangles;
+  limits.temp_dir = opt.temp_dir.empty() ? std::filesystem::absolute(opt.output).parent_path().string() : opt.temp_dir;
+  StreamedModel model(file, placement_matrix(turn), limits);
+  Vec3 move = opt.placement.offset;
+  if (opt.place == "grid") move += grid.next(model.bounds());
+  uint64_t patches = 0;
+  model.patches(move, [&](Object& patch) {
+    tally.add(patch, out);
+    ++patches;
+  });
+  tally.split += patches > 1;
+  ++tally.streamed;
+}
+
 void run_import(const ImportOptions& opt) {
+  const uint64_t baseline = current_rss_bytes();
   refuse_same_files(opt.inputs, {opt.output, opt.obj, opt.gltf});
   SceneWriter scene(opt.output);
   std::unique_ptr<ObjWriter> obj = opt.obj.empty() ? nullptr : std::make_unique<ObjWriter>(opt.obj);
@@ -105,43 +148,41 @@ void run_import(const ImportOptions& opt) {
   if (gltf) sinks.push_back(gltf.get());
   TeeSink out(sinks);
 
-  SceneCounts counts;
-  Aabb bounds;
-  uint64_t skipped = 0, split = 0, textures = 0;
+  ImportTally tally;
+  const SceneCounts& counts = tally.counts;
   GridPlacer grid(opt.inputs.size());
-  // One file at a time: only the model being read is in memory.
+  // One file at a time: only the model being read is in memory (a part of it, when streamed).
   for (const std::string& file : opt.inputs) {
+    if (opt.stream || streams_within(file, uint64_t(opt.memory_mib * 1024 * 1024))) {
+      import_streamed(file, opt, grid, out, tally);
+      continue;
+    }
     ImportedModel model = import_model(file);
     std::vector<Object>& objects = model.objects;
     place_model(objects, opt, grid);
     // The model's textures are numbered from 0; in the scene they follow the earlier models'.
-    const uint32_t first_texture = uint32_t(textures);
+    const uint32_t first_texture = uint32_t(tally.textures);
     for (const TextureImage& texture : model.textures) out.add_texture(texture);
-    textures += model.textures.size();
+    tally.textures += model.textures.size();
     for (Object& o : objects)
       if (o.mesh.texture != kNoTexture) o.mesh.texture += first_texture;
     for (Object& read : objects) {
-      // A point cloud has nothing to draw; ids stay dense over the objects kept.
+      // A point cloud has nothing to draw.
       if (read.mesh.triangle_count() == 0) {
-        ++skipped;
+        ++tally.skipped;
         continue;
       }
       std::vector<Object> patches = opt.patch_triangles > 0 ? split_into_patches(std::move(read), opt.patch_triangles)
                                                            : std::vector<Object>{std::move(read)};
-      split += patches.size() > 1;
-      for (Object& object : patches) {
-        object.id = static_cast<ObjectId>(counts.objects);
-        bounds.extend(object.bounds);
-        counts.count(object);
-        out.add(object);
-      }
+      tally.split += patches.size() > 1;
+      for (Object& object : patches) tally.add(object, out);
     }
   }
   if (counts.objects == 0) fail("import", "the input files hold no triangles");
 
   SceneInfo info;
   info.generator = "import";
-  info.nav = loop_around(bounds);
+  info.nav = loop_around(tally.bounds);
   scene.finish(info);
   if (obj) obj->finish();
   if (gltf) gltf->finish();
@@ -149,14 +190,20 @@ void run_import(const ImportOptions& opt) {
   if (opt.json) {
     nlohmann::ordered_json j = {{"inputs", opt.inputs}, {"output", opt.output}, {"objects", counts.objects},
                         {"triangles", counts.triangles}, {"vertices", counts.vertices},
-                        {"bytes", counts.bytes},     {"skipped_without_triangles", skipped},
-                        {"split_into_patches", split}, {"textures", textures}};
+                        {"bytes", counts.bytes},     {"skipped_without_triangles", tally.skipped},
+                        {"split_into_patches", tally.split}, {"textures", tally.textures},
+                        {"streamed", tally.streamed}, {"memory_bytes", uint64_t(opt.memory_mib * 1024 * 1024)},
+                        {"baseline_rss_bytes", baseline}, {"peak_rss_bytes", peak_rss_bytes()}};
     print_json("import", j);
   } else {
     std::printf("imported %llu objects, %llu triangles, %llu bytes", static_cast<unsigned long long>(counts.objects),
                 static_cast<unsigned long long>(counts.triangles), static_cast<unsigned long long>(counts.bytes));
-    if (split > 0) std::printf(" (%llu large meshes split into patches of at most %zu triangles)", static_cast<unsigned long long>(split), opt.patch_triangles);
-    if (textures > 0) std::printf(", %llu textures", static_cast<unsigned long long>(textures));
+    if (tally.split > 0) std::printf(" (%llu large meshes split into patches of at most %zu triangles)", static_cast<unsigned long long>(tally.split), opt.patch_triangles);
+    if (tally.textures > 0) std::printf(", %llu textures", static_cast<unsigned long long>(tally.textures));
+    if (tally.streamed > 0)
+      std::printf(", %llu streamed within %.0f MiB (process peak %.1f MiB, %.1f MiB at start)",
+                  static_cast<unsigned long long>(tally.streamed), opt.memory_mib, peak_rss_bytes() / 1048576.0,
+                  baseline / 1048576.0);
     std::printf("\n");
   }
 }
@@ -181,6 +228,13 @@ void register_import(CLI::App& root) {
                   "Split meshes larger than this into spatial patches of at most this many triangles, so that culling and "
                   "LOD work on parts of one big mesh (0: never split)")
       ->capture_default_str()->check(integer_in(0, 1 << 30));
+  cmd->add_option("--memory", opt->memory_mib,
+                  "MiB a model read streamed may take beyond the program's own; PLY files whose import in memory could "
+                  "exceed it (over a quarter of it in size) are read streamed")
+      ->capture_default_str()->check(number_in(32, 1 << 20));
+  cmd->add_flag("--stream", opt->stream, "Read every model streamed, within --memory (PLY only)");
+  cmd->add_option("--temp-dir", opt->temp_dir,
+                  "Folder for a streamed model's scratch files (~140 B of disk per triangle; default: the output's folder)");
   cmd->add_flag("--json", opt->json, "Print the counts as JSON");
   cmd->callback([opt] {
     opt->placement.z_up = opt->up == "z";

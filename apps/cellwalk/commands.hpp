@@ -31,6 +31,7 @@ void register_bench_visual(CLI::App& bench, std::string (*command_line)());
 void register_bench_visibility(CLI::App& bench, std::string (*command_line)());
 void register_bench_vlod(CLI::App& bench, std::string (*command_line)());
 void register_bench_disk_order(CLI::App& bench, std::string (*command_line)());
+void register_bench_import(CLI::App& bench, std::string (*command_line)());
 void register_bench_pvs_stream(CLI::App& bench, std::string (*command_line)());
 void register_bench_stratified(CLI::App& bench, std::string (*command_line)());
 void register_bench_lichiang(CLI::App& bench, std::string (*command_line)());

@@ -29,7 +29,7 @@ std::vector<uint8_t> read_whole_file(const std::string& path) {
   if (size == 0) fail(path, "is empty");
   if (size > kMaxModelBytes)
     fail(path, "is " + std::to_string(size) + " bytes; models over " +
-                   std::to_string(kMaxModelBytes) + " bytes are not read (split it)");
+                   std::to_string(kMaxModelBytes) + " bytes are not read whole: convert it to PLY, which import reads streamed");
   std::vector<uint8_t> bytes(size);
   if (!in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size)))
     fail(path, "read failed after " + std::to_string(in.gcount()) + " bytes");
@@ -82,6 +82,35 @@ std::optional<TextureImage> read_texture_file(const std::string& uri, const std:
     return std::nullopt;
   }
   return checked_texture({file.filename().string(), std::move(bytes)}, file.string());
+}
+
+void MeshCollector::begin_vertices(uint64_t count, bool normals, bool colors) {
+  // Readers check the count against the bytes left before they call this.
+  object.mesh.positions.reserve(count);
+  normals_ = normals;
+  colors_ = colors;
+}
+
+void MeshCollector::vertex(const Vec3& position, const Vec3& normal, Rgba8 color) {
+  object.mesh.positions.push_back(position);
+  if (normals_) object.mesh.normals.push_back(normal);
+  if (colors_) object.mesh.colors.push_back(color);
+}
+
+void MeshCollector::triangle(uint32_t a, uint32_t b, uint32_t c) {
+  object.mesh.indices.insert(object.mesh.indices.end(), {a, b, c});
+}
+
+Object read_ply(Bytes bytes, const std::string& name) {
+  MeshCollector collector;
+  read_ply(bytes, name, collector);
+  return std::move(collector.object);
+}
+
+Object read_off(Bytes bytes, const std::string& name) {
+  MeshCollector collector;
+  read_off(bytes, name, collector);
+  return std::move(collector.object);
 }
 
 void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon) {

@@ -45,7 +45,7 @@ uint8_t off_channel(const TextCursor& in, std::string_view token) {
   return color_channel(in.to_double(token, "a colour value"), unit ? 1.0 : 255.0);
 }
 
-void read_vertex(TextCursor& in, const OffLayout& layout, Mesh& mesh) {
+void read_vertex(TextCursor& in, const OffLayout& layout, MeshBuilder& out) {
   std::array<std::string_view, kMaxValuesPerVertex> v;
   size_t n = 0;
   v[n++] = in.token();
@@ -59,23 +59,23 @@ void read_vertex(TextCursor& in, const OffLayout& layout, Mesh& mesh) {
       (!layout.colors && n != needed))
     in.fail("vertex line has " + std::to_string(n) + " values, which does not match the header");
   auto number = [&](size_t i) { return static_cast<float>(in.to_double(v[i], "a coordinate")); };
-  mesh.positions.emplace_back(number(0), number(1), number(2));
+  Vec3 normal(0.0f);
+  Rgba8 color = 0;
   size_t next = 3;
   if (layout.normals) {
-    mesh.normals.emplace_back(number(3), number(4), number(5));
+    normal = Vec3(number(3), number(4), number(5));
     next = 6;
   }
   if (layout.colors) {
     const bool alpha = n == needed + 4;
-    mesh.colors.push_back(rgba8(off_channel(in, v[next]), off_channel(in, v[next + 1]),
-                                off_channel(in, v[next + 2]),
-                                alpha ? off_channel(in, v[next + 3]) : 255));
+    color = rgba8(off_channel(in, v[next]), off_channel(in, v[next + 1]), off_channel(in, v[next + 2]),
+                  alpha ? off_channel(in, v[next + 3]) : 255);
   }
+  out.vertex(Vec3(number(0), number(1), number(2)), normal, color);
   in.next_line();
 }
 
-void read_face(TextCursor& in, uint64_t vertex_count, std::vector<uint32_t>& polygon,
-               Mesh& mesh) {
+void read_face(TextCursor& in, uint64_t vertex_count, std::vector<uint32_t>& polygon, MeshBuilder& out) {
   const uint64_t n = in.to_count(in.token(), "face vertex count", 2);
   if (n < 3) in.fail("face has " + std::to_string(n) + " vertices; a face needs at least 3");
   polygon.clear();
@@ -86,13 +86,13 @@ void read_face(TextCursor& in, uint64_t vertex_count, std::vector<uint32_t>& pol
               std::to_string(vertex_count) + " vertices");
     polygon.push_back(static_cast<uint32_t>(index));
   }
-  append_fan(mesh.indices, polygon);
+  out.polygon(polygon);
   in.next_line();  // a face colour may follow; it is not used
 }
 
 }  // namespace
 
-Object read_off(Bytes bytes, const std::string& name) {
+void read_off(Bytes bytes, const std::string& name, MeshBuilder& out) {
   TextCursor in(bytes, name, '#');
   const OffLayout layout = parse_keyword(in);
   const std::string_view first = in.token();
@@ -104,18 +104,19 @@ Object read_off(Bytes bytes, const std::string& name) {
   if (vertices > UINT32_MAX) in.fail("more than 2^32 vertices");
   in.next_line();
 
-  Object object;
-  Mesh& mesh = object.mesh;
-  mesh.positions.reserve(vertices);
-  for (uint64_t i = 0; i < vertices; ++i) read_vertex(in, layout, mesh);
-  mesh.indices.reserve(faces * 3);
+  out.begin_vertices(vertices, layout.normals, layout.colors);
+  for (uint64_t i = 0; i < vertices; ++i) {
+    read_vertex(in, layout, out);
+    if (i % kItemsBetweenReports == 0) out.consumed(in.offset());
+  }
   std::vector<uint32_t> polygon;
   for (uint64_t i = 0; i < faces; ++i) {
     if (in.at_end()) in.fail("file ends after " + std::to_string(i) + " of " +
                              std::to_string(faces) + " faces");
-    read_face(in, vertices, polygon, mesh);
+    read_face(in, vertices, polygon, out);
+    if (i % kItemsBetweenReports == 0) out.consumed(in.offset());
   }
-  return object;
+  out.consumed(in.offset());
 }
 
 }  // namespace cellwalk::detail

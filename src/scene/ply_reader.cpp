@@ -155,6 +155,9 @@ class BodyReader {
            " items but only " + std::to_string(remaining()) + " bytes are left");
   }
 
+  // Bytes of the input read so far.
+  uint64_t offset() const { return format_ == PlyFormat::kAscii ? text_.offset() : pos_; }
+
   uint64_t read_list_count(const Property& p) {
     const double n = read(p.count_type);
     const size_t each = format_ == PlyFormat::kAscii ? 2 : size_of(p.type);
@@ -242,13 +245,11 @@ void skip_list(BodyReader& body, const Property& p) {
   for (uint64_t i = 0; i < n; ++i) body.read(p.type);
 }
 
-void read_vertices(BodyReader& body, const Element& e, Mesh& mesh) {
+void read_vertices(BodyReader& body, const Element& e, MeshBuilder& out) {
   const VertexLayout l = vertex_layout(e, body);
   const bool normals = l.normal[0] >= 0 && l.normal[1] >= 0 && l.normal[2] >= 0;
   const bool colors = l.color[0] >= 0 && l.color[1] >= 0 && l.color[2] >= 0;
-  mesh.positions.reserve(e.count);
-  if (normals) mesh.normals.reserve(e.count);
-  if (colors) mesh.colors.reserve(e.count);
+  out.begin_vertices(e.count, normals, colors);
   std::vector<double> v(e.properties.size(), 0.0);
   for (uint64_t i = 0; i < e.count; ++i) {
     for (size_t k = 0; k < e.properties.size(); ++k) {
@@ -256,16 +257,17 @@ void read_vertices(BodyReader& body, const Element& e, Mesh& mesh) {
       else v[k] = body.read(e.properties[k].type);
     }
     auto vec = [&v](const int (&idx)[3]) { return Vec3(v[idx[0]], v[idx[1]], v[idx[2]]); };
-    mesh.positions.push_back(vec(l.position));
-    if (normals) mesh.normals.push_back(vec(l.normal));
+    Rgba8 color = 0;
     if (colors) {
       auto ch = [&](int k) { return to_channel(v[l.color[k]], e.properties[l.color[k]].type); };
-      mesh.colors.push_back(rgba8(ch(0), ch(1), ch(2), l.color[3] >= 0 ? ch(3) : 255));
+      color = rgba8(ch(0), ch(1), ch(2), l.color[3] >= 0 ? ch(3) : 255);
     }
+    out.vertex(vec(l.position), normals ? vec(l.normal) : Vec3(0.0f), color);
+    if (i % kItemsBetweenReports == 0) out.consumed(body.offset());
   }
 }
 
-void read_faces(BodyReader& body, const Element& e, uint64_t vertex_count, Mesh& mesh) {
+void read_faces(BodyReader& body, const Element& e, uint64_t vertex_count, MeshBuilder& out) {
   int list = -1;
   for (int i = 0; i < static_cast<int>(e.properties.size()); ++i) {
     const Property& p = e.properties[i];
@@ -292,8 +294,9 @@ void read_faces(BodyReader& body, const Element& e, uint64_t vertex_count, Mesh&
                     " but there are " + std::to_string(vertex_count) + " vertices");
         polygon.push_back(static_cast<uint32_t>(index));
       }
-      append_fan(mesh.indices, polygon);
+      out.polygon(polygon);
     }
+    if (f % kItemsBetweenReports == 0) out.consumed(body.offset());
   }
 }
 
@@ -306,9 +309,10 @@ void skip_element(BodyReader& body, const Element& e) {
     }
 }
 
+
 }  // namespace
 
-Object read_ply(Bytes bytes, const std::string& name) {
+void read_ply(Bytes bytes, const std::string& name, MeshBuilder& out) {
   TextCursor in(bytes, name, '\0');
   const Header header = parse_header(in);
   BodyReader body(in, bytes, header.format, name);
@@ -322,14 +326,13 @@ Object read_ply(Bytes bytes, const std::string& name) {
   if (vertex_elements > 1) in.fail("header declares more than one vertex element");
   if (vertex_count > UINT32_MAX) body.fail("more than 2^32 vertices");
 
-  Object object;
   for (const Element& e : header.elements) {
     body.check_fits(e);
-    if (e.name == "vertex") read_vertices(body, e, object.mesh);
-    else if (e.name == "face") read_faces(body, e, vertex_count, object.mesh);
+    if (e.name == "vertex") read_vertices(body, e, out);
+    else if (e.name == "face") read_faces(body, e, vertex_count, out);
     else skip_element(body, e);
   }
-  return object;
+  out.consumed(body.offset());
 }
 
 }  // namespace cellwalk::detail

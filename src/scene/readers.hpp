@@ -18,6 +18,46 @@ namespace cellwalk::detail {
 
 using Bytes = std::span<const uint8_t>;
 
+// Receives a single-mesh model as a reader parses it, so that the model need not be held
+// whole: the in-memory import collects it, the streamed one (streamed_import.cpp) writes it to
+// scratch files. Calls come in the file's order; indices were checked against the vertex count.
+class MeshBuilder {
+ public:
+  virtual ~MeshBuilder() = default;
+  // Once, before the vertices: how many there are and whether they carry normals and colours.
+  virtual void begin_vertices(uint64_t count, bool normals, bool colors) = 0;
+  // `normal` and `color` are meaningful only when begin_vertices said so.
+  virtual void vertex(const Vec3& position, const Vec3& normal, Rgba8 color) = 0;
+  // One triangle of a polygon's fan.
+  virtual void triangle(uint32_t a, uint32_t b, uint32_t c) = 0;
+  // The reader has read the input up to byte `offset` (now and then, and once at the end).
+  virtual void consumed(uint64_t /*offset*/) {}
+
+  // A convex polygon as the fan (v0, v[i], v[i+1]), as append_fan makes it.
+  void polygon(std::span<const uint32_t> v) {
+    for (size_t i = 2; i < v.size(); ++i) triangle(v[0], v[i - 1], v[i]);
+  }
+};
+
+// Keeps what it is given: the import in memory.
+class MeshCollector : public MeshBuilder {
+ public:
+  void begin_vertices(uint64_t count, bool normals, bool colors) override;
+  void vertex(const Vec3& position, const Vec3& normal, Rgba8 color) override;
+  void triangle(uint32_t a, uint32_t b, uint32_t c) override;
+  Object object;
+
+ private:
+  bool normals_ = false, colors_ = false;
+};
+
+// How often readers tell their builder how far they are (MeshBuilder::consumed), in items.
+constexpr uint64_t kItemsBetweenReports = 1 << 16;
+
+// The single-mesh readers into a builder. REQUIRES of each: `bytes` outlives the call.
+void read_ply(Bytes bytes, const std::string& name, MeshBuilder& out);
+void read_off(Bytes bytes, const std::string& name, MeshBuilder& out);
+
 // Single-object formats return the object unfinished: positions, indices and whatever
 // normals/colours the file had; finish_object() (import.cpp) does the rest.
 Object read_off(Bytes bytes, const std::string& name);

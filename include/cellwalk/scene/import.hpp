@@ -5,6 +5,8 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -43,6 +45,46 @@ ImportedModel import_model(const std::string& file, ObjectId first_id = 0);
 // own vertices (normals and colours carried, so seams shade alike), named NAME#k, with the
 // object's id and colour. The patches partition the triangles. REQUIRES: max_triangles > 0.
 std::vector<Object> split_into_patches(Object object, size_t max_triangles);
+
+// Importing a model larger than memory (streamed_import.cpp): a PLY or OFF file is read once into
+// scratch files, its triangles partitioned out of core into spatial buckets that fit
+// `memory_bytes`, and each bucket split into patches as split_into_patches does. Whatever the
+// model's size, the import holds about memory_bytes (the cache of vertices, the bucket in hand,
+// the buckets' write buffers); the scratch files take about 28 B per vertex plus 108 B per
+// triangle of disk in `temp_dir`, and are unlinked at once (nothing is left if the process dies).
+struct StreamLimits {
+  uint64_t memory_bytes = uint64_t(1) << 30;
+  size_t patch_triangles = 16384;  // REQUIRES: > 0 (a streamed model is always split)
+  std::string temp_dir;            // empty: the system's (TMPDIR or /tmp)
+};
+
+// Whether import reads `file` streamed: a PLY or OFF whose import in memory could take more than
+// `memory_bytes` (about four times its size), or that is over the 2 GiB read whole.
+bool streams_within(const std::string& file, uint64_t memory_bytes);
+
+class StreamedModel {
+ public:
+  // Reads `file` (PLY, ascii or binary, or OFF), its positions and normals transformed by `placement`.
+  // Errors name the file and byte or line, as import_model's do.
+  StreamedModel(const std::string& file, const Mat4& placement, StreamLimits limits);
+  ~StreamedModel();
+  StreamedModel(const StreamedModel&) = delete;
+  StreamedModel& operator=(const StreamedModel&) = delete;
+
+  const Aabb& bounds() const;
+  uint64_t triangle_count() const;
+  uint64_t vertex_count() const;
+
+  // Hands `out` each patch in spatial order (at most limits.patch_triangles triangles, moved by
+  // `move`, named STEM#k, id 0: the caller numbers them); together they hold every triangle of
+  // the file once, with the normals of the whole mesh (area-weighted when the file has none).
+  // Call once.
+  void patches(const Vec3& move, const std::function<void(Object&)>& out);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
 
 // Where an imported model goes: first its up axis is turned to +y, then it is scaled, then
 // moved by `offset`.
