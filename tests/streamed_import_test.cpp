@@ -323,6 +323,21 @@ TEST(ImportCommand, StreamsAModelLargerThanItsMemoryWithinIt) {
     EXPECT_GT(whole.max_rss_bytes, baseline + kMemory);
   }
 
+  // A patch bound above what fits the memory gives smaller patches, not a larger process.
+  const test::CommandResult large_patches = test::run_cellwalk("import " + file + " -o " + dir.file("large.cwscene") +
+                                                               " --memory 32 --patch-triangles 2000000 --json");
+  ASSERT_EQ(large_patches.exit_code, 0) << large_patches.output;
+  if (!test::kUnderAddressSanitizer) {
+    const uint64_t baseline = test::json_output(large_patches).value("baseline_rss_bytes", uint64_t(0));
+    EXPECT_LE(large_patches.max_rss_bytes, baseline + kMemory) << "peak " << large_patches.max_rss_bytes / 1048576.0 << " MiB";
+  }
+  // Unsplit (--patch-triangles 0), a file under 2 GiB is read whole, as before streaming was.
+  const test::CommandResult unsplit = test::run_cellwalk("import " + file + " -o " + dir.file("unsplit.cwscene") +
+                                                         " --memory 32 --patch-triangles 0 --json");
+  ASSERT_EQ(unsplit.exit_code, 0) << unsplit.output;
+  EXPECT_EQ(test::json_output(unsplit).value("streamed", 1), 0);
+  EXPECT_EQ(test::json_output(unsplit).value("objects", 0), 1);
+
   const std::vector<uint8_t> before = test::slurp(scene);
   std::vector<uint8_t> bytes = test::slurp(file);
   bytes.resize(bytes.size() - 1000);
@@ -332,6 +347,42 @@ TEST(ImportCommand, StreamsAModelLargerThanItsMemoryWithinIt) {
   EXPECT_NE(damaged.exit_code, 0);
   EXPECT_NE(damaged.output.find(cut + "@"), std::string::npos) << damaged.output;
   EXPECT_EQ(test::slurp(scene), before);
+}
+
+// Pages of the mapped file are given back behind the reader in every element, the ones it reads
+// past too: a PLY whose 48 MB are mostly an element import does not use is imported within
+// 32 MiB. A point cloud streamed is skipped, as read whole, and the import goes on.
+TEST(ImportCommand, StreamedImportGivesBackWhatItReadPastAndSkipsPointClouds) {
+  TempDir dir;
+  const std::string file = dir.file("edges.ply");
+  {
+    const PlainMesh m = height_field(20, 0);
+    std::ofstream out(file, std::ios::binary);
+    const uint64_t edges = 6'000'000;
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex " << m.positions.size()
+        << "\nproperty float x\nproperty float y\nproperty float z\nelement edge " << edges
+        << "\nproperty int vertex1\nproperty int vertex2\nelement face " << m.triangles.size()
+        << "\nproperty list uchar int vertex_indices\nend_header\n";
+    out.write(reinterpret_cast<const char*>(m.positions.data()), std::streamsize(m.positions.size() * sizeof(Vec3)));
+    const std::vector<int32_t> zeros(2 * edges, 0);
+    out.write(reinterpret_cast<const char*>(zeros.data()), std::streamsize(zeros.size() * sizeof(int32_t)));
+    for (const auto& t : m.triangles) {
+      out.put(3);
+      out.write(reinterpret_cast<const char*>(t.data()), 12);
+    }
+  }
+  const std::string points = test::cgal_mesh("b9.ply");  // 22,300 vertices, no face
+  const test::CommandResult r = test::run_cellwalk("import " + points + " " + file + " -o " + dir.file("edges.cwscene") +
+                                                   " --stream --memory 32 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const nlohmann::json j = test::json_output(r);
+  EXPECT_EQ(j.value("streamed", 0), 2);
+  EXPECT_EQ(j.value("skipped_without_triangles", 0), 1);
+  EXPECT_EQ(j.value("triangles", 0), 2 * 19 * 19);
+  if (!test::kUnderAddressSanitizer) {
+    EXPECT_LE(r.max_rss_bytes, j.value("baseline_rss_bytes", uint64_t(0)) + (32ull << 20))
+        << "peak " << r.max_rss_bytes / 1048576.0 << " MiB";
+  }
 }
 
 }  // namespace

@@ -125,6 +125,11 @@ void import_streamed(const std::string& file, const ImportOptions& opt, GridPlac
   limits.patch_triangles = opt.patch_triangles;
   limits.temp_dir = opt.temp_dir.empty() ? std::filesystem::absolute(opt.output).parent_path().string() : opt.temp_dir;
   StreamedModel model(file, placement_matrix(turn), limits);
+  ++tally.streamed;
+  if (model.triangle_count() == 0) {  // a point cloud, as read whole: skipped
+    ++tally.skipped;
+    return;
+  }
   Vec3 move = opt.placement.offset;
   if (opt.place == "grid") move += grid.next(model.bounds());
   uint64_t patches = 0;
@@ -133,7 +138,6 @@ void import_streamed(const std::string& file, const ImportOptions& opt, GridPlac
     ++patches;
   });
   tally.split += patches > 1;
-  ++tally.streamed;
 }
 
 void run_import(const ImportOptions& opt) {
@@ -153,7 +157,7 @@ void run_import(const ImportOptions& opt) {
   GridPlacer grid(opt.inputs.size());
   // One file at a time: only the model being read is in memory (a part of it, when streamed).
   for (const std::string& file : opt.inputs) {
-    if (opt.stream || streams_within(file, uint64_t(opt.memory_mib * 1024 * 1024))) {
+    if (opt.stream || streams_within(file, uint64_t(opt.memory_mib * 1024 * 1024), opt.patch_triangles > 0)) {
       import_streamed(file, opt, grid, out, tally);
       continue;
     }
@@ -232,9 +236,10 @@ void register_import(CLI::App& root) {
                   "MiB a model read streamed may take beyond the program's own; PLY files whose import in memory could "
                   "exceed it (over a quarter of it in size) are read streamed")
       ->capture_default_str()->check(number_in(32, 1 << 20));
-  cmd->add_flag("--stream", opt->stream, "Read every model streamed, within --memory (PLY only)");
+  cmd->add_flag("--stream", opt->stream, "Read every model streamed, within --memory (PLY and OFF only)");
   cmd->add_option("--temp-dir", opt->temp_dir,
-                  "Folder for a streamed model's scratch files (~140 B of disk per triangle; default: the output's folder)");
+                  "Folder for a streamed model's scratch files (28 B a vertex and 108 B a triangle of disk, 96 B more a "
+                  "triangle for each further partition step; default: the output's folder)");
   cmd->add_flag("--json", opt->json, "Print the counts as JSON");
   cmd->callback([opt] {
     opt->placement.z_up = opt->up == "z";

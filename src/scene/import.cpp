@@ -114,8 +114,7 @@ Object read_off(Bytes bytes, const std::string& name) {
 }
 
 void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon) {
-  for (size_t i = 2; i < polygon.size(); ++i)
-    indices.insert(indices.end(), {polygon[0], polygon[i - 1], polygon[i]});
+  for_each_fan_triangle(polygon, [&](uint32_t a, uint32_t b, uint32_t c) { indices.insert(indices.end(), {a, b, c}); });
 }
 
 }  // namespace detail

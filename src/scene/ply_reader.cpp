@@ -300,13 +300,15 @@ void read_faces(BodyReader& body, const Element& e, uint64_t vertex_count, MeshB
   }
 }
 
-void skip_element(BodyReader& body, const Element& e) {
+void skip_element(BodyReader& body, const Element& e, MeshBuilder& out) {
   if (e.properties.empty()) return;  // nothing to read, however large the count
-  for (uint64_t i = 0; i < e.count; ++i)
+  for (uint64_t i = 0; i < e.count; ++i) {
     for (const Property& p : e.properties) {
       if (p.is_list) skip_list(body, p);
       else body.read(p.type);
     }
+    if (i % kItemsBetweenReports == 0) out.consumed(body.offset());
+  }
 }
 
 
@@ -330,7 +332,7 @@ void read_ply(Bytes bytes, const std::string& name, MeshBuilder& out) {
     body.check_fits(e);
     if (e.name == "vertex") read_vertices(body, e, out);
     else if (e.name == "face") read_faces(body, e, vertex_count, out);
-    else skip_element(body, e);
+    else skip_element(body, e, out);
   }
   out.consumed(body.offset());
 }

@@ -18,6 +18,13 @@ namespace cellwalk::detail {
 
 using Bytes = std::span<const uint8_t>;
 
+// Calls f(a, b, c) for each triangle of the fan (v0, v[i], v[i+1]) of a convex polygon, the
+// triangulation every polygon format here uses.
+template <typename F>
+void for_each_fan_triangle(std::span<const uint32_t> v, F&& f) {
+  for (size_t i = 2; i < v.size(); ++i) f(v[0], v[i - 1], v[i]);
+}
+
 // Receives a single-mesh model as a reader parses it, so that the model need not be held
 // whole: the in-memory import collects it, the streamed one (streamed_import.cpp) writes it to
 // scratch files. Calls come in the file's order; indices were checked against the vertex count.
@@ -33,9 +40,9 @@ class MeshBuilder {
   // The reader has read the input up to byte `offset` (now and then, and once at the end).
   virtual void consumed(uint64_t /*offset*/) {}
 
-  // A convex polygon as the fan (v0, v[i], v[i+1]), as append_fan makes it.
+  // A convex polygon, as its fan.
   void polygon(std::span<const uint32_t> v) {
-    for (size_t i = 2; i < v.size(); ++i) triangle(v[0], v[i - 1], v[i]);
+    for_each_fan_triangle(v, [this](uint32_t a, uint32_t b, uint32_t c) { triangle(a, b, c); });
   }
 };
 
@@ -51,8 +58,9 @@ class MeshCollector : public MeshBuilder {
   bool normals_ = false, colors_ = false;
 };
 
-// How often readers tell their builder how far they are (MeshBuilder::consumed), in items.
-constexpr uint64_t kItemsBetweenReports = 1 << 16;
+// How often readers tell their builder how far they are (MeshBuilder::consumed), in items: often
+// enough that the bytes between two reports stay small next to any memory bound.
+constexpr uint64_t kItemsBetweenReports = 1 << 10;
 
 // The single-mesh readers into a builder. REQUIRES of each: `bytes` outlives the call.
 void read_ply(Bytes bytes, const std::string& name, MeshBuilder& out);
@@ -107,8 +115,7 @@ std::string format_number(double v);
 // Validates the mesh, computes normals when absent and sets the bounds.
 void finish_object(Object& object, const std::string& name);
 
-// Appends the fan (v0, v[i], v[i+1]) of a convex polygon, the triangulation every polygon
-// format here uses. REQUIRES: polygon.size() >= 3.
+// Appends the fan of a convex polygon (for_each_fan_triangle). REQUIRES: polygon.size() >= 3.
 void append_fan(std::vector<uint32_t>& indices, std::span<const uint32_t> polygon);
 
 // Walks a text model by tokens, counting lines for error messages. `comment` starts a comment

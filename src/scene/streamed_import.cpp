@@ -82,12 +82,11 @@ class ScratchFile {
 
   void append(const void* data, size_t n) {
     buffer_.append(static_cast<const char*>(data), n);
-    if (buffer_.size() >= kFileBufferBytes) flush();
+    if (buffer_.size() >= kFileBufferBytes) write_buffer();
   }
+  // After the last append: everything readable, the buffer's memory given back.
   void flush() {
-    write_at(flushed_, buffer_.data(), buffer_.size());
-    flushed_ += buffer_.size();
-    buffer_.clear();
+    write_buffer();
     buffer_.shrink_to_fit();
   }
   uint64_t size() const { return flushed_ + buffer_.size(); }
@@ -118,6 +117,12 @@ class ScratchFile {
   }
 
  private:
+  void write_buffer() {
+    write_at(flushed_, buffer_.data(), buffer_.size());
+    flushed_ += buffer_.size();
+    buffer_.clear();
+  }
+
   std::string dir_;
   int fd_ = -1;
   uint64_t flushed_ = 0;
@@ -138,24 +143,26 @@ void for_each_item(const ScratchFile& file, uint64_t offset, uint64_t count, F&&
 
 // The model file, mapped read-only. Pages behind the reader are given back (MADV_DONTNEED), so
 // the mapping's share of the process's resident memory stays within `window` bytes.
+// A file cut short by another process while mapped ends the process (SIGBUS), as any mapped
+// reader does: import a model that is no longer being written (docs/import.md).
 class MappedFile {
  public:
-  MappedFile(const std::string& path, uint64_t window) : path_(path), window_(window) {
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) fail(path, std::string("cannot open: ") + std::strerror(errno));
+  MappedFile(const std::string& path, uint64_t window) : window_(window) {
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) fail(path, std::string("cannot open: ") + std::strerror(errno) + "; check the path and its permissions");
     struct stat st {};
-    if (::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) fail(path, "is not a regular file");
-    size_ = uint64_t(st.st_size);
+    const bool regular = ::fstat(fd, &st) == 0 && S_ISREG(st.st_mode);
+    size_ = regular ? uint64_t(st.st_size) : 0;
+    void* p = size_ > 0 ? ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+    const int map_error = errno;
+    ::close(fd);  // the mapping keeps the file
+    if (!regular) fail(path, "is not a regular file");
     if (size_ == 0) fail(path, "is empty");
-    void* p = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd_, 0);
-    if (p == MAP_FAILED) fail(path, std::string("cannot map: ") + std::strerror(errno));
+    if (p == MAP_FAILED) fail(path, std::string("cannot map: ") + std::strerror(map_error));
     data_ = static_cast<uint8_t*>(p);
     ::madvise(data_, size_, MADV_SEQUENTIAL);
   }
-  ~MappedFile() {
-    if (data_) ::munmap(data_, size_);
-    ::close(fd_);
-  }
+  ~MappedFile() { ::munmap(data_, size_); }
   MappedFile(const MappedFile&) = delete;
   MappedFile& operator=(const MappedFile&) = delete;
 
@@ -170,9 +177,7 @@ class MappedFile {
   }
 
  private:
-  std::string path_;
   uint64_t window_;
-  int fd_ = -1;
   uint8_t* data_ = nullptr;
   uint64_t size_ = 0;
   uint64_t released_ = 0;
@@ -247,8 +252,7 @@ class ScratchBuilder : public detail::MeshBuilder {
         normal_matrix_(glm::transpose(glm::inverse(glm::mat3(m)))), input_(input), name_(name),
         progress_("reading " + std::filesystem::path(name).filename().string(), input.bytes().size()) {}
 
-  void begin_vertices(uint64_t count, bool normals, bool colors) override {
-    count_ = count;
+  void begin_vertices(uint64_t, bool normals, bool colors) override {
     normals_ = normals;
     colors_ = colors;
   }
@@ -277,7 +281,6 @@ class ScratchBuilder : public detail::MeshBuilder {
     progress_.update(offset);
   }
   void finish() {
-    if (written_ != count_) fail(name_, "holds " + std::to_string(written_) + " of its " + std::to_string(count_) + " vertices");
     vertices_.flush();
     triangles_.flush();
     progress_.finish();
@@ -297,7 +300,7 @@ class ScratchBuilder : public detail::MeshBuilder {
   MappedFile& input_;
   const std::string& name_;
   Progress progress_;
-  uint64_t count_ = 0, written_ = 0;
+  uint64_t written_ = 0;
   bool normals_ = false, colors_ = false;
 };
 
@@ -315,21 +318,29 @@ class TriangleSource {
   virtual void done() {}
 };
 
+// The whole mesh, read from the first pass's files through a cache of vertex blocks; done()
+// gives back the cache and the files (only buckets are read after it).
 class MeshSource : public TriangleSource {
  public:
-  MeshSource(const ScratchFile& triangles, uint64_t count, std::unique_ptr<VertexCache> cache)
-      : triangles_(triangles), count_(count), cache_(std::move(cache)) {}
+  MeshSource(std::unique_ptr<ScratchFile> vertices, std::unique_ptr<ScratchFile> triangles, uint64_t vertex_count,
+             uint64_t triangle_count, uint64_t cache_bytes)
+      : vertices_(std::move(vertices)), triangles_(std::move(triangles)), count_(triangle_count),
+        cache_(std::make_unique<VertexCache>(*vertices_, vertex_count, cache_bytes)) {}
   void for_each(const std::function<void(const Triangle&)>& f) override {
-    for_each_item<std::array<uint32_t, 3>>(triangles_, 0, count_, [&](const std::array<uint32_t, 3>& t) {
+    for_each_item<std::array<uint32_t, 3>>(*triangles_, 0, count_, [&](const std::array<uint32_t, 3>& t) {
       Triangle tri;
       for (int k = 0; k < 3; ++k) tri[k] = {t[k], cache_->at(t[k], false)};
       f(tri);
     });
   }
-  void done() override { cache_.reset(); }
+  void done() override {
+    cache_.reset();
+    triangles_.reset();
+    vertices_.reset();
+  }
 
  private:
-  const ScratchFile& triangles_;
+  std::unique_ptr<ScratchFile> vertices_, triangles_;
   uint64_t count_;
   std::unique_ptr<VertexCache> cache_;
 };
@@ -412,14 +423,48 @@ std::vector<CellBox> bucket_boxes(const std::vector<uint64_t>& cells, const Vec3
   return out;
 }
 
+// One partition step's buckets: boxes of cells, which bucket each cell's triangles go to, and
+// where each bucket's range starts in the step's scratch file.
+struct Buckets {
+  std::vector<uint32_t> of_cell;
+  std::vector<uint64_t> count, first;
+  std::vector<Aabb> box;
+};
+
+// The grid's cells cut into at most 2 × max_buckets boxes of about `target` triangles (more
+// when that would take more boxes: buffers and bookkeeping stay bounded).
+Buckets make_buckets(const std::vector<uint64_t>& cells, const Aabb& box, uint64_t target, size_t max_buckets) {
+  std::vector<CellBox> boxes = bucket_boxes(cells, box.size(), target);
+  while (boxes.size() > 2 * max_buckets) boxes = bucket_boxes(cells, box.size(), target *= 2);
+  Buckets b;
+  b.of_cell.assign(cells.size(), 0);
+  b.count.assign(boxes.size(), 0);
+  b.first.assign(boxes.size(), 0);
+  b.box.resize(boxes.size());
+  const Vec3 step = box.size() / float(kGridSide);
+  for (size_t i = 0; i < boxes.size(); ++i) {
+    const CellBox& c = boxes[i];
+    b.box[i] = {box.min + Vec3(c.lo[0], c.lo[1], c.lo[2]) * step, box.min + Vec3(c.hi[0], c.hi[1], c.hi[2]) * step};
+    for (int z = c.lo[2]; z < c.hi[2]; ++z)
+      for (int y = c.lo[1]; y < c.hi[1]; ++y)
+        for (int x = c.lo[0]; x < c.hi[0]; ++x) {
+          const size_t cell = size_t(x + kGridSide * (y + kGridSide * z));
+          b.of_cell[cell] = uint32_t(i);
+          b.count[i] += cells[cell];
+        }
+    if (i > 0) b.first[i] = b.first[i - 1] + b.count[i - 1];
+  }
+  return b;
+}
+
 }  // namespace
 
 struct StreamedModel::Impl {
   std::string file;
   StreamLimits limits;
   uint64_t bucket_triangles = 0;  // a bucket read whole holds at most this many
-  size_t max_buckets = 0;         // asked of one partition step (the cuts may make up to twice as many)
-  ScratchFile vertices, triangles;
+  size_t max_buckets = 0;         // asked of one partition step (make_buckets allows twice as many)
+  std::unique_ptr<ScratchFile> vertices, triangles;
   Aabb bounds;
   uint64_t vertex_count = 0, triangle_count = 0;
   bool colors = false;
@@ -433,7 +478,8 @@ struct StreamedModel::Impl {
   uint64_t emitted = 0;
 
   Impl(const std::string& f, StreamLimits l)
-      : file(f), limits(std::move(l)), vertices(temp_dir()), triangles(temp_dir()) {}
+      : file(f), limits(std::move(l)), vertices(std::make_unique<ScratchFile>(temp_dir())),
+        triangles(std::make_unique<ScratchFile>(temp_dir())) {}
 
   std::string temp_dir() const {
     if (!limits.temp_dir.empty()) return limits.temp_dir;
@@ -443,29 +489,25 @@ struct StreamedModel::Impl {
 
   void read(const Mat4& placement) {
     MappedFile input(file, std::max<uint64_t>(limits.memory_bytes / 8, 1 << 20));
-    ScratchBuilder builder(vertices, triangles, placement, input, file);
+    ScratchBuilder builder(*vertices, *triangles, placement, input, file);
     if (format_of(file) == ModelFormat::kOff) detail::read_off(input.bytes(), file, builder);
     else detail::read_ply(input.bytes(), file, builder);
     builder.finish();
-    if (builder.triangle_count == 0) fail(file, "holds no triangles");
     bounds = builder.bounds;
     vertex_count = builder.vertex_count();
     triangle_count = builder.triangle_count;
     colors = builder.colors();
-    if (!builder.normals()) accumulate_normals();
+    if (!builder.normals() && triangle_count > 0) accumulate_normals();
   }
 
-  std::unique_ptr<VertexCache> cache() {
-    return std::make_unique<VertexCache>(vertices, vertex_count, limits.memory_bytes / 4);
-  }
+  uint64_t cache_bytes() const { return limits.memory_bytes / 4; }
 
   // Pass 2: compute_normals' sums, out of core (normalised when a bucket is read).
   void accumulate_normals() {
-    const std::unique_ptr<VertexCache> cached = cache();
-    VertexCache& c = *cached;
+    VertexCache c(*vertices, vertex_count, cache_bytes());
     Progress progress("normals", triangle_count);
     uint64_t done = 0;
-    for_each_item<std::array<uint32_t, 3>>(triangles, 0, triangle_count, [&](const std::array<uint32_t, 3>& t) {
+    for_each_item<std::array<uint32_t, 3>>(*triangles, 0, triangle_count, [&](const std::array<uint32_t, 3>& t) {
       const Vec3 a = c.at(t[0], false).position, b = c.at(t[1], false).position, d = c.at(t[2], false).position;
       const Vec3 n = glm::cross(b - a, d - a);
       for (uint32_t v : t) c.at(v, true).normal += n;
@@ -481,70 +523,65 @@ struct StreamedModel::Impl {
     if (count <= bucket_triangles) return emit_whole(source, count);
     const Vec3 size = box.size();
     if (depth >= kMaxDepth || std::max({size.x, size.y, size.z}) <= 0.0f) return emit_in_file_order(source);
+    const uint64_t target = std::max<uint64_t>(bucket_triangles, (count + max_buckets - 1) / max_buckets);
+    Buckets buckets = make_buckets(count_cells(source, box), box, target, max_buckets);
+    ScratchFile file(temp_dir());
+    distribute(source, box, buckets, file);
+    source.done();
+    buckets.of_cell = {};
+    // A bucket still too large (a dense cell) is partitioned again within its smaller box; one
+    // whose centroids all coincide reaches kMaxDepth and is cut in file order.
+    for (size_t b = 0; b < buckets.count.size(); ++b) {
+      RangeSource range(file, buckets.first[b], buckets.count[b]);
+      partition(range, buckets.box[b], buckets.count[b], depth + 1);
+    }
+  }
 
+  // The triangles of each cell of a 64³ grid over `box`, by centroid.
+  static std::vector<uint64_t> count_cells(TriangleSource& source, const Aabb& box) {
     std::vector<uint64_t> cells(size_t(kGridSide) * kGridSide * kGridSide, 0);
     source.for_each([&](const Triangle& t) { ++cells[size_t(cell_of(centroid(t), box))]; });
+    return cells;
+  }
 
-    const uint64_t target = std::max<uint64_t>(bucket_triangles, (count + max_buckets - 1) / max_buckets);
-    const std::vector<CellBox> boxes = bucket_boxes(cells, size, target);
-    std::vector<uint32_t> bucket_of(cells.size(), 0);
-    std::vector<uint64_t> bucket_count(boxes.size(), 0);
-    std::vector<Aabb> bucket_box(boxes.size());
-    const Vec3 step = size / float(kGridSide);
-    for (size_t i = 0; i < boxes.size(); ++i) {
-      const CellBox& b = boxes[i];
-      bucket_box[i] = {box.min + Vec3(b.lo[0], b.lo[1], b.lo[2]) * step, box.min + Vec3(b.hi[0], b.hi[1], b.hi[2]) * step};
-      for (int z = b.lo[2]; z < b.hi[2]; ++z)
-        for (int y = b.lo[1]; y < b.hi[1]; ++y)
-          for (int x = b.lo[0]; x < b.hi[0]; ++x) {
-            const size_t c = size_t(x + kGridSide * (y + kGridSide * z));
-            bucket_of[c] = uint32_t(i);
-            bucket_count[i] += cells[c];
-          }
-    }
-    cells = {};
-
-    ScratchFile file(temp_dir());
-    std::vector<uint64_t> first(bucket_count.size(), 0), written(bucket_count.size(), 0);
-    for (size_t b = 1; b < first.size(); ++b) first[b] = first[b - 1] + bucket_count[b - 1];
-    // Write buffers within an eighth of the memory however many buckets the cuts made.
-    const size_t per_buffer = std::clamp<size_t>(size_t(limits.memory_bytes / 8 / sizeof(Triangle) / bucket_count.size()), 1,
-                                                 kBucketBufferBytes / sizeof(Triangle));
-    std::vector<std::vector<Triangle>> buffers(bucket_count.size());
+  // Writes each triangle to its bucket's range of `file`, through a buffer per bucket (all
+  // within an eighth of the memory).
+  void distribute(TriangleSource& source, const Aabb& box, const Buckets& buckets, ScratchFile& scratch) const {
+    const size_t n = buckets.count.size();
+    const size_t per_buffer =
+        std::clamp<size_t>(size_t(limits.memory_bytes / 8 / sizeof(Triangle) / n), 1, kBucketBufferBytes / sizeof(Triangle));
+    std::vector<std::vector<Triangle>> buffers(n);
+    std::vector<uint64_t> written(n, 0);
     auto drain = [&](size_t b) {
-      file.write_at((first[b] + written[b]) * sizeof(Triangle), buffers[b].data(), buffers[b].size() * sizeof(Triangle));
+      // The second pass sees what the first counted (the same records, the same cells): a bucket
+      // overflowing its range would overwrite the next one's, so it is checked, not assumed.
+      if (written[b] + buffers[b].size() > buckets.count[b]) fail(file, "internal error: a bucket outgrew its count");
+      scratch.write_at((buckets.first[b] + written[b]) * sizeof(Triangle), buffers[b].data(),
+                    buffers[b].size() * sizeof(Triangle));
       written[b] += buffers[b].size();
       buffers[b].clear();
     };
     source.for_each([&](const Triangle& t) {
-      const size_t b = bucket_of[size_t(cell_of(centroid(t), box))];
+      const size_t b = buckets.of_cell[size_t(cell_of(centroid(t), box))];
       if (buffers[b].capacity() == 0) buffers[b].reserve(per_buffer);
       buffers[b].push_back(t);
       if (buffers[b].size() == per_buffer) drain(b);
     });
-    for (size_t b = 0; b < buffers.size(); ++b) drain(b);
-    source.done();
-    buffers = {};
-    bucket_of = {};
-
-    // A bucket still too large (a dense cell) is partitioned again within its smaller box; one
-    // whose centroids all coincide reaches kMaxDepth and is cut in file order.
-    for (size_t b = 0; b < bucket_count.size(); ++b) {
-      RangeSource range(file, first[b], bucket_count[b]);
-      partition(range, bucket_box[b], bucket_count[b], depth + 1);
-    }
+    for (size_t b = 0; b < n; ++b) drain(b);
   }
 
   void emit_in_file_order(TriangleSource& source) {
     std::vector<Triangle> chunk;
+    chunk.reserve(size_t(bucket_triangles));
     source.for_each([&](const Triangle& t) {
       chunk.push_back(t);
       if (chunk.size() == bucket_triangles) {
-        emit(chunk);
-        chunk.clear();
+        emit(std::move(chunk));
+        chunk = {};
+        chunk.reserve(size_t(bucket_triangles));
       }
     });
-    if (!chunk.empty()) emit(chunk);
+    if (!chunk.empty()) emit(std::move(chunk));
   }
 
   void emit_whole(TriangleSource& source, uint64_t count) {
@@ -552,33 +589,17 @@ struct StreamedModel::Impl {
     bucket.reserve(size_t(count));
     source.for_each([&](const Triangle& t) { bucket.push_back(t); });
     source.done();
-    emit(bucket);
+    emit(std::move(bucket));
   }
 
   // One bucket as an object (corners shared by file vertex), split into patches.
-  void emit(std::vector<Triangle>& bucket) {
+  void emit(std::vector<Triangle> bucket) {
     Object object;
     object.name = std::filesystem::path(file).stem().string();
-    Mesh& mesh = object.mesh;
-    {
-      std::unordered_map<uint32_t, uint32_t> local;
-      local.reserve(bucket.size());
-      for (const Triangle& t : bucket)
-        for (const Corner& c : t) {
-          auto [it, added] = local.emplace(c.vertex, uint32_t(mesh.positions.size()));
-          if (added) {
-            const float len = glm::length(c.record.normal);
-            mesh.positions.push_back(c.record.position + move);
-            mesh.normals.push_back(len > 0.0f ? c.record.normal / len : Vec3(0.0f, 1.0f, 0.0f));
-            if (colors) mesh.colors.push_back(c.record.color);
-          }
-          mesh.indices.push_back(it->second);
-        }
-    }
+    object.mesh = shared_corners(bucket);
     emitted += bucket.size();
-    bucket.clear();
-    bucket.shrink_to_fit();
-    object.bounds = bounds_of(mesh);
+    bucket = {};  // before split_into_patches makes its copies
+    object.bounds = bounds_of(object.mesh);
     for (Object& patch : split_into_patches(std::move(object), limits.patch_triangles)) {
       patch.name = std::filesystem::path(file).stem().string() + "#" + std::to_string(patches++);
       (*out)(patch);
@@ -587,14 +608,35 @@ struct StreamedModel::Impl {
     // The bucket's blocks are free now; the next bucket's may not fit the holes they leave.
     return_freed_heap();
   }
+
+  // The bucket's triangles as a mesh whose corners are shared again by their vertex in the
+  // file, moved, with unit normals.
+  Mesh shared_corners(const std::vector<Triangle>& bucket) const {
+    Mesh mesh;
+    std::unordered_map<uint32_t, uint32_t> local;
+    local.reserve(bucket.size());
+    for (const Triangle& t : bucket)
+      for (const Corner& c : t) {
+        auto [it, added] = local.emplace(c.vertex, uint32_t(mesh.positions.size()));
+        if (added) {
+          const float len = glm::length(c.record.normal);
+          mesh.positions.push_back(c.record.position + move);
+          mesh.normals.push_back(len > 0.0f ? c.record.normal / len : Vec3(0.0f, 1.0f, 0.0f));
+          if (colors) mesh.colors.push_back(c.record.color);
+        }
+        mesh.indices.push_back(it->second);
+      }
+    return mesh;
+  }
 };
 
-bool streams_within(const std::string& file, uint64_t memory_bytes) {
+bool streams_within(const std::string& file, uint64_t memory_bytes, bool split) {
   std::error_code ec;
   const uint64_t size = std::filesystem::file_size(file, ec);
   const ModelFormat format = format_of(file);
-  return !ec && (format == ModelFormat::kPly || format == ModelFormat::kOff) &&
-         (size > memory_bytes / 4 || size > detail::kMaxModelBytes);
+  if (ec || (format != ModelFormat::kPly && format != ModelFormat::kOff)) return false;
+  // Unsplit, a model is read whole while it can be.
+  return size > detail::kMaxModelBytes || (split && size > memory_bytes / 4);
 }
 
 StreamedModel::StreamedModel(const std::string& file, const Mat4& placement, StreamLimits limits) {
@@ -604,8 +646,9 @@ StreamedModel::StreamedModel(const std::string& file, const Mat4& placement, Str
   if (limits.patch_triangles == 0) fail(file, "a streamed model is always split: --patch-triangles must be at least 1");
   impl_ = std::make_unique<Impl>(file, std::move(limits));
   Impl& m = *impl_;
-  m.bucket_triangles = std::max<uint64_t>(m.limits.patch_triangles, m.limits.memory_bytes / 2 / kLoadBytesPerTriangle);
-  // Median cuts make up to about twice as many buckets as asked: their 64 KiB buffers then fit M / 8.
+  // Patches are cut from buckets: a --patch-triangles above what fits gives smaller patches.
+  m.bucket_triangles = std::max<uint64_t>(1, m.limits.memory_bytes / 2 / kLoadBytesPerTriangle);
+  // With up to twice as many buckets as asked, their 64 KiB buffers fit M / 8.
   m.max_buckets = std::clamp<size_t>(size_t(m.limits.memory_bytes / 16 / kBucketBufferBytes), 8, 4096);
   m.read(placement);
 }
@@ -622,8 +665,9 @@ void StreamedModel::patches(const Vec3& move, const std::function<void(Object&)>
   m.done = true;
   m.move = move;
   m.out = &out;
+  if (m.triangle_count == 0) return;  // a point cloud: nothing to draw
   m.progress.emplace("partitioning " + std::filesystem::path(m.file).filename().string(), m.triangle_count);
-  MeshSource source(m.triangles, m.triangle_count, m.cache());
+  MeshSource source(std::move(m.vertices), std::move(m.triangles), m.vertex_count, m.triangle_count, m.cache_bytes());
   m.partition(source, m.bounds, m.triangle_count, 0);
   m.progress->finish();
 }

@@ -58,9 +58,10 @@ struct StreamLimits {
   std::string temp_dir;            // empty: the system's (TMPDIR or /tmp)
 };
 
-// Whether import reads `file` streamed: a PLY or OFF whose import in memory could take more than
-// `memory_bytes` (about four times its size), or that is over the 2 GiB read whole.
-bool streams_within(const std::string& file, uint64_t memory_bytes);
+// Whether import reads `file` streamed: a PLY or OFF over the 2 GiB read whole, or, when it is
+// to be `split` into patches, one whose import in memory could take more than `memory_bytes`
+// (about four times its size).
+bool streams_within(const std::string& file, uint64_t memory_bytes, bool split);
 
 class StreamedModel {
  public:
@@ -75,7 +76,8 @@ class StreamedModel {
   uint64_t triangle_count() const;
   uint64_t vertex_count() const;
 
-  // Hands `out` each patch in spatial order (at most limits.patch_triangles triangles, moved by
+  // Hands `out` each patch in spatial order (at most limits.patch_triangles triangles, fewer
+  // when a bucket that fits memory_bytes holds fewer; none for a point cloud; moved by
   // `move`, named STEM#k, id 0: the caller numbers them); together they hold every triangle of
   // the file once, with the normals of the whole mesh (area-weighted when the file has none).
   // Call once.
