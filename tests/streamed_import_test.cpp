@@ -211,6 +211,31 @@ TEST(StreamedImport, RealScansMatchTheirImportInMemory) {
   EXPECT_EQ(a, b);
 }
 
+// OBJ streamed is its geometry alone: one mesh of its faces, whatever its groups (read whole,
+// they would be objects of their own, each with its own normals).
+TEST(StreamedImport, ObjGeometryMatchesTheImportInMemory) {
+  TempDir dir;
+  const PlainMesh field = height_field(60, 5);
+  const std::string file = dir.file("field.obj");
+  {
+    std::ofstream out(file);
+    out << "# a height field\nmtllib none.mtl\no field\n";
+    for (const Vec3& p : field.positions) out << "v " << p.x << " " << p.y << " " << p.z << "\nvt 0 0\n";
+    for (const auto& t : field.triangles)  // 1-based, the second corner relative, with vt
+      out << "f " << t[0] + 1 << "/" << t[0] + 1 << " " << int64_t(t[1]) - int64_t(field.positions.size()) << " "
+          << t[2] + 1 << "//1\n";
+  }
+  const Streamed s = stream(file, 1 << 20, 500);
+  EXPECT_GT(s.patches.size(), field.triangles.size() / 500);
+  expect_same_as_in_memory(file, s, 500);
+  // assimp's spider: 19 groups read whole; streamed, the same triangles in patches.
+  const std::string spider = test::assimp_model("OBJ/spider.obj");
+  size_t whole = 0, streamed = 0;
+  for (const Object& o : import_model(spider).objects) whole += o.mesh.triangle_count();
+  for (const Object& o : stream(spider, 1 << 20, 500).patches) streamed += o.mesh.triangle_count();
+  EXPECT_EQ(streamed, whole);
+}
+
 TEST(StreamedImport, PlacementTurnsScalesAndMovesAsImportDoes) {
   TempDir dir;
   const std::string file = dir.file("field.ply");
@@ -276,7 +301,11 @@ TEST(StreamedImport, DamagedFilesAndBadSettingsAreNamed) {
   const std::string bad_index = dir.file("bad-index.ply");
   test::spit(bad_index, bad);
   expect_error([&] { stream(bad_index, 1 << 20, 100); }, "uses vertex 900 but there are 900 vertices");
-  expect_error([&] { stream(test::assimp_model("OBJ/box.obj"), 1 << 20, 100); }, "only PLY and OFF models are read streamed");
+  expect_error([&] { stream(test::assimp_model("glTF2/BoxTextured-glTF-Binary/BoxTextured.glb"), 1 << 20, 100); },
+               "glTF is not read streamed");
+  const std::string bad_obj = dir.file("bad.obj");
+  test::spit(bad_obj, {'v', ' ', '0', ' ', '0', ' ', '0', '\n', 'f', ' ', '1', ' ', '2', ' ', '1', '\n'});
+  expect_error([&] { stream(bad_obj, 1 << 20, 100); }, bad_obj + ":2: face uses vertex 2 but 1 vertices are defined so far");
   StreamLimits limits;
   limits.temp_dir = dir.file("no-such-folder");
   expect_error([&] { StreamedModel(file, Mat4(1.0f), limits); }, "--temp-dir");

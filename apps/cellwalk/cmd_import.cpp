@@ -233,10 +233,10 @@ void register_import(CLI::App& root) {
                   "LOD work on parts of one big mesh (0: never split)")
       ->capture_default_str()->check(integer_in(0, 1 << 30));
   cmd->add_option("--memory", opt->memory_mib,
-                  "MiB a model read streamed may take beyond the program's own; PLY files whose import in memory could "
-                  "exceed it (over a quarter of it in size) are read streamed")
+                  "MiB a model read streamed may take beyond the program's own; PLY and OFF files whose import in memory "
+                  "could exceed it (over a quarter of it in size) are read streamed, and any file over 2 GiB but glTF")
       ->capture_default_str()->check(number_in(32, 1 << 20));
-  cmd->add_flag("--stream", opt->stream, "Read every model streamed, within --memory (PLY and OFF only)");
+  cmd->add_flag("--stream", opt->stream, "Read every model streamed, within --memory (PLY, OFF, and OBJ as one mesh without its groups and materials)");
   cmd->add_option("--temp-dir", opt->temp_dir,
                   "Folder for a streamed model's scratch files (28 B a vertex and 108 B a triangle of disk, 96 B more a "
                   "triangle for each further partition step; default: the output's folder)");

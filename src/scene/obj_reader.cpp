@@ -66,7 +66,13 @@ void read_uv(TextCursor& in, ObjState& s) {
   s.uvs.emplace_back(float(v[0]), float(1.0 - v[1]));
 }
 
-void read_vertex(TextCursor& in, ObjState& s) {
+// A "v" line's values: the position, and the colour when it has "r g b".
+struct ObjVertex {
+  Vec3 position;
+  std::optional<Rgba8> color;
+};
+
+ObjVertex parse_vertex(TextCursor& in) {
   double v[6];
   int n = 0;
   for (std::string_view t = in.token_in_line(); !t.empty(); t = in.token_in_line()) {
@@ -74,10 +80,17 @@ void read_vertex(TextCursor& in, ObjState& s) {
     v[n++] = in.to_double(t, "a coordinate");
   }
   if (n < 3) in.fail("'v' needs three coordinates");
-  s.positions.emplace_back(v[0], v[1], v[2]);
-  if (n == 6) {
+  ObjVertex out{Vec3(v[0], v[1], v[2]), std::nullopt};
+  if (n == 6) out.color = rgba8(color_channel(v[3], 1.0), color_channel(v[4], 1.0), color_channel(v[5], 1.0));
+  return out;
+}
+
+void read_vertex(TextCursor& in, ObjState& s) {
+  const ObjVertex v = parse_vertex(in);
+  s.positions.push_back(v.position);
+  if (v.color) {
     s.colors.resize(s.positions.size());  // keeps indices aligned with positions
-    s.colors.back() = rgba8(color_channel(v[3], 1.0), color_channel(v[4], 1.0), color_channel(v[5], 1.0));
+    s.colors.back() = *v.color;
     ++s.colored;
   }
 }
@@ -94,13 +107,14 @@ uint32_t resolve_reference(TextCursor& in, std::string_view text, size_t count, 
   return static_cast<uint32_t>(resolved);
 }
 
-// The position and texture coordinate (kNoUv if absent) of one "v/vt/vn" reference, 0-based.
-std::pair<uint32_t, uint32_t> vertex_reference(TextCursor& in, std::string_view ref, const ObjState& s) {
+// The position and texture coordinate (kNoUv if absent) of one "v/vt/vn" reference, 0-based,
+// among the `positions` and `uvs` defined so far.
+std::pair<uint32_t, uint32_t> vertex_reference(TextCursor& in, std::string_view ref, size_t positions, size_t uvs) {
   const size_t slash = ref.find('/');
-  const uint32_t position = resolve_reference(in, ref.substr(0, slash), s.positions.size(), "vertex", "vertices");
+  const uint32_t position = resolve_reference(in, ref.substr(0, slash), positions, "vertex", "vertices");
   if (slash == std::string_view::npos) return {position, kNoUv};
   const std::string_view vt = ref.substr(slash + 1, ref.find('/', slash + 1) - slash - 1);
-  return {position, vt.empty() ? kNoUv : resolve_reference(in, vt, s.uvs.size(), "texture coordinate", "texture coordinates")};
+  return {position, vt.empty() ? kNoUv : resolve_reference(in, vt, uvs, "texture coordinate", "texture coordinates")};
 }
 
 // The rest of the line as one name ("g a b" names the group "a b"); `fallback` when empty.
@@ -128,7 +142,7 @@ void read_face(TextCursor& in, ObjState& s, const std::string& stem) {
   s.polygon.clear();
   s.polygon_uvs.clear();
   for (std::string_view t = in.token_in_line(); !t.empty(); t = in.token_in_line()) {
-    const auto [position, uv] = vertex_reference(in, t, s);
+    const auto [position, uv] = vertex_reference(in, t, s.positions.size(), s.uvs.size());
     s.polygon.push_back(position);
     s.polygon_uvs.push_back(uv);
   }
@@ -312,6 +326,37 @@ ImportedModel read_obj(Bytes bytes, const std::string& name, const std::string& 
     if (s.colored == s.positions.size()) objects.back().mesh.colors = s.colors;
   }
   return {std::move(objects), std::move(s.textures)};
+}
+
+void read_obj_geometry(Bytes bytes, const std::string& name, MeshBuilder& out) {
+  TextCursor in(bytes, name, '#');
+  out.begin_vertices(0, false, false);
+  uint64_t positions = 0, uvs = 0, lines = 0;
+  bool dropped = false;
+  std::vector<uint32_t> polygon;
+  for (std::string_view key = in.token(); !key.empty(); key = in.token()) {
+    if (key == "v") {
+      if (positions == UINT32_MAX) in.fail("more than 2^32 - 1 vertices");
+      out.vertex(parse_vertex(in).position, Vec3(0.0f), 0);
+      ++positions;
+    } else if (key == "vt") {
+      ++uvs;  // counted, so that face references are checked as read_obj checks them
+    } else if (key == "f") {
+      polygon.clear();
+      for (std::string_view t = in.token_in_line(); !t.empty(); t = in.token_in_line())
+        polygon.push_back(vertex_reference(in, t, positions, uvs).first);
+      if (polygon.size() < 3) in.fail("face has " + std::to_string(polygon.size()) + " vertices; a face needs at least 3");
+      out.polygon(polygon);
+    } else if (key == "o" || key == "g" || key == "usemtl" || key == "mtllib") {
+      dropped = true;
+    }
+    in.next_line();
+    if (++lines % kItemsBetweenReports == 0) out.consumed(in.offset());
+  }
+  out.consumed(in.offset());
+  if (dropped)
+    std::fprintf(stderr, "note: %s: read streamed as one mesh cut into patches; its groups and materials are not kept\n",
+                 name.c_str());
 }
 
 }  // namespace cellwalk::detail

@@ -31,7 +31,8 @@ void for_each_fan_triangle(std::span<const uint32_t> v, F&& f) {
 class MeshBuilder {
  public:
   virtual ~MeshBuilder() = default;
-  // Once, before the vertices: how many there are and whether they carry normals and colours.
+  // Once, before the vertices: how many there are (0 when the file does not say) and whether they
+  // carry normals and colours.
   virtual void begin_vertices(uint64_t count, bool normals, bool colors) = 0;
   // `normal` and `color` are meaningful only when begin_vertices said so.
   virtual void vertex(const Vec3& position, const Vec3& normal, Rgba8 color) = 0;
@@ -65,6 +66,9 @@ constexpr uint64_t kItemsBetweenReports = 1 << 10;
 // The single-mesh readers into a builder. REQUIRES of each: `bytes` outlives the call.
 void read_ply(Bytes bytes, const std::string& name, MeshBuilder& out);
 void read_off(Bytes bytes, const std::string& name, MeshBuilder& out);
+// An OBJ's geometry alone, for the streamed import: "v" positions (colours dropped) and "f"
+// polygons, checked as read_obj checks them; groups, materials, vt and vn are not kept.
+void read_obj_geometry(Bytes bytes, const std::string& name, MeshBuilder& out);
 
 // Single-object formats return the object unfinished: positions, indices and whatever
 // normals/colours the file had; finish_object() (import.cpp) does the rest.

@@ -1,6 +1,6 @@
 // Importing a model larger than memory (issue 16, item 1). Three passes over disk, each with
 // memory bounded by StreamLimits::memory_bytes whatever the model's size:
-//  1. read: the PLY or OFF file, mapped and released behind the reader, goes into two scratch files,
+//  1. read: the PLY, OFF or OBJ file (OBJ's geometry alone), mapped and released behind the reader, goes into two scratch files,
 //     the vertices (position, normal, colour: 28 B) and the triangles (3 × u32);
 //  2. normals (when the file has none): each triangle's area-weighted normal added to its
 //     corners' through a write-back cache of vertex blocks — the whole mesh's normals, as
@@ -490,8 +490,11 @@ struct StreamedModel::Impl {
   void read(const Mat4& placement) {
     MappedFile input(file, std::max<uint64_t>(limits.memory_bytes / 8, 1 << 20));
     ScratchBuilder builder(*vertices, *triangles, placement, input, file);
-    if (format_of(file) == ModelFormat::kOff) detail::read_off(input.bytes(), file, builder);
-    else detail::read_ply(input.bytes(), file, builder);
+    switch (format_of(file)) {
+      case ModelFormat::kOff: detail::read_off(input.bytes(), file, builder); break;
+      case ModelFormat::kObj: detail::read_obj_geometry(input.bytes(), file, builder); break;
+      default: detail::read_ply(input.bytes(), file, builder);
+    }
     builder.finish();
     bounds = builder.bounds;
     vertex_count = builder.vertex_count();
@@ -634,15 +637,17 @@ bool streams_within(const std::string& file, uint64_t memory_bytes, bool split) 
   std::error_code ec;
   const uint64_t size = std::filesystem::file_size(file, ec);
   const ModelFormat format = format_of(file);
-  if (ec || (format != ModelFormat::kPly && format != ModelFormat::kOff)) return false;
-  // Unsplit, a model is read whole while it can be.
-  return size > detail::kMaxModelBytes || (split && size > memory_bytes / 4);
+  if (ec || format == ModelFormat::kGltf) return false;
+  // Unsplit, a model is read whole while it can be; an OBJ too, as streamed it loses its groups
+  // and materials.
+  if (size > detail::kMaxModelBytes) return true;
+  return format != ModelFormat::kObj && split && size > memory_bytes / 4;
 }
 
 StreamedModel::StreamedModel(const std::string& file, const Mat4& placement, StreamLimits limits) {
-  if (const ModelFormat f = format_of(file); f != ModelFormat::kPly && f != ModelFormat::kOff)
-    fail(file, "only PLY and OFF models are read streamed; convert it to binary PLY (e.g. `assimp export " +
-                   std::filesystem::path(file).filename().string() + " model.ply`) or import it whole");
+  if (format_of(file) == ModelFormat::kGltf)
+    fail(file, "glTF is not read streamed (its buffers are read whole, up to 2 GiB); convert it to binary PLY "
+               "(e.g. `assimp export " + std::filesystem::path(file).filename().string() + " model.ply`) or import it whole");
   if (limits.patch_triangles == 0) fail(file, "a streamed model is always split: --patch-triangles must be at least 1");
   impl_ = std::make_unique<Impl>(file, std::move(limits));
   Impl& m = *impl_;

@@ -46,7 +46,8 @@ ImportedModel import_model(const std::string& file, ObjectId first_id = 0);
 // object's id and colour. The patches partition the triangles. REQUIRES: max_triangles > 0.
 std::vector<Object> split_into_patches(Object object, size_t max_triangles);
 
-// Importing a model larger than memory (streamed_import.cpp): a PLY or OFF file is read once into
+// Importing a model larger than memory (streamed_import.cpp): a PLY, OFF or OBJ file (OBJ's
+// geometry alone: one mesh, no groups or materials) is read once into
 // scratch files, its triangles partitioned out of core into spatial buckets that fit
 // `memory_bytes`, and each bucket split into patches as split_into_patches does. Whatever the
 // model's size, the import holds about memory_bytes (the cache of vertices, the bucket in hand,
@@ -58,14 +59,14 @@ struct StreamLimits {
   std::string temp_dir;            // empty: the system's (TMPDIR or /tmp)
 };
 
-// Whether import reads `file` streamed: a PLY or OFF over the 2 GiB read whole, or, when it is
-// to be `split` into patches, one whose import in memory could take more than `memory_bytes`
-// (about four times its size).
+// Whether import reads `file` streamed: a PLY, OFF or OBJ over the 2 GiB read whole, or, when it
+// is to be `split` into patches, a PLY or OFF whose import in memory could take more than
+// `memory_bytes` (about four times its size).
 bool streams_within(const std::string& file, uint64_t memory_bytes, bool split);
 
 class StreamedModel {
  public:
-  // Reads `file` (PLY, ascii or binary, or OFF), its positions and normals transformed by `placement`.
+  // Reads `file` (PLY, ascii or binary, OFF, or OBJ's geometry), its positions and normals transformed by `placement`.
   // Errors name the file and byte or line, as import_model's do.
   StreamedModel(const std::string& file, const Mat4& placement, StreamLimits limits);
   ~StreamedModel();
