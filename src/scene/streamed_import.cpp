@@ -662,7 +662,6 @@ StreamedModel::~StreamedModel() = default;
 
 const Aabb& StreamedModel::bounds() const { return impl_->bounds; }
 uint64_t StreamedModel::triangle_count() const { return impl_->triangle_count; }
-uint64_t StreamedModel::vertex_count() const { return impl_->vertex_count; }
 
 void StreamedModel::patches(const Vec3& move, const std::function<void(Object&)>& out) {
   Impl& m = *impl_;

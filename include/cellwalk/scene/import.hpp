@@ -75,7 +75,6 @@ class StreamedModel {
 
   const Aabb& bounds() const;
   uint64_t triangle_count() const;
-  uint64_t vertex_count() const;
 
   // Hands `out` each patch in spatial order (at most limits.patch_triangles triangles, fewer
   // when a bucket that fits memory_bytes holds fewer; none for a point cloud; moved by
