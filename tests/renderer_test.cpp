@@ -437,6 +437,25 @@ size_t changed_pixels(const Image& a, const Image& b, int x0, int y0, int x1, in
   return changed;
 }
 
+TEST_F(RendererTest, AnInnerContextGivesTheOuterOneBackWhenDestroyed) {
+  // A far-field baker makes its own context inside a walk or a test; when it goes, the
+  // renderers of the context around it must draw again.
+  Meshes meshes = random_scene(16, 9);
+  const std::vector<DrawItem> items = items_for(16);
+  Renderer outer(settings());
+  outer.render(test_camera(), items, meshes.provider());
+  const Image expected = outer.read_color();
+  {
+    const std::unique_ptr<GlContext> inner = GlContext::headless();
+    Renderer renderer(settings());
+    renderer.render(test_camera(), items, meshes.provider());
+    EXPECT_EQ(renderer.read_color().rgba, expected.rgba);
+  }
+  EXPECT_FALSE(context_->renderer_name().empty());
+  outer.render(test_camera(), items, meshes.provider());
+  EXPECT_EQ(outer.read_color().rgba, expected.rgba);
+}
+
 TEST_F(RendererTest, LinesAreDrawnOverTheImageAndLeaveIdsAlone) {
   Meshes meshes;
   meshes.add(0, make_box(Vec3(0.0f), Vec3(1.0f)));

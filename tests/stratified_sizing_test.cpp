@@ -120,6 +120,23 @@ TEST(StratifiedSizing, Eq23GivesTheThesisBox) {
   EXPECT_THROW(box_side_from_budget(fill_bound), Error);
 }
 
+TEST(StratifiedSizing, FaceResolutionForAScreenIsTheSmallestWithATexelWithinAPixel) {
+  EXPECT_EQ(face_resolution_for_screen(512, M_PI / 2), 512);  // §5.3's faces for its screen
+  for (const int height : {1, 240, 480, 1080, 2160})
+    for (const double fov_deg : {20.0, 45.0, 60.0, 90.0, 120.0}) {
+      const double fov = fov_deg * M_PI / 180;
+      const int r = face_resolution_for_screen(height, fov);
+      const double pixel = 2 * std::tan(fov / 2) / height;  // tangent span of a pixel at the centre
+      EXPECT_LE(2.0 / r, pixel * (1 + 1e-9)) << height << " px at " << fov_deg << "°";
+      if (r > 1) {
+        EXPECT_GT(2.0 / (r - 1), pixel) << height << " px at " << fov_deg << "°";
+      }
+    }
+  EXPECT_THROW(face_resolution_for_screen(0, 1.0), Error);
+  EXPECT_THROW(face_resolution_for_screen(480, 0.0), Error);
+  EXPECT_THROW(face_resolution_for_screen(480, M_PI), Error);
+}
+
 TEST(StratifiedSizing, CellCountsOfTheCampusAndTheCity) {
   // §2.4.3: the campus, 1 km × 1 km × 10 m at v = 6.35 → 158²·2 = 49,928 ≈ 50,000; the city,
   // 10 km × 10 km × 100 m at 6.22 m → 4.1×10^7 by volume.
@@ -228,6 +245,26 @@ TEST(StratifyPlan, BadArgumentsGetOneLineAndAFailure) {
 namespace cellwalk::stratified {
 namespace {
 
+TEST(StratifyBuild, ScreenGivesTheResolutionAndLevelsCutTheBakedTriangles) {
+  const test::TempDir dir;
+  const std::string world = dir.file("city.cww");
+  for (const std::string& command : {"generate stratified-city --blocks-x 2 --blocks-z 2 -o " + dir.file("city.cwscene"),
+                                     "build " + dir.file("city.cwscene") + " -o " + world})
+    ASSERT_EQ(test::run_cellwalk(command).exit_code, 0) << command;
+  const auto build = [&](const std::string& options) {
+    const test::CommandResult r = test::run_cellwalk("stratify build " + world + " -o " + dir.file("s.cww") +
+                                                     " --box 60 --alpha 10 --json " + options);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return nlohmann::json::parse(r.output);
+  };
+  const auto screen = build("--screen 48:90 --far-level-texels 0");
+  EXPECT_EQ(screen["resolution"], 48);
+  EXPECT_EQ(build("--screen 40:60 --far-level-texels 0")["resolution"], face_resolution_for_screen(40, M_PI / 3));
+  const auto coarse = build("--screen 48:90 --far-level-texels 50");
+  EXPECT_EQ(coarse["baked_cells"], screen["baked_cells"]);
+  EXPECT_LT(coarse["bake_triangles_per_cell"].get<uint64_t>(), screen["bake_triangles_per_cell"].get<uint64_t>());
+}
+
 TEST(StratifyBuild, BadInputGetsOneLineAndLeavesTheWorldAlone) {
   const test::TempDir dir;
   const std::string world = test::write_street_world(dir, 6);
@@ -236,6 +273,9 @@ TEST(StratifyBuild, BadInputGetsOneLineAndLeavesTheWorldAlone) {
   for (const std::string& args : {"stratify build " + dir.file("junk.cww"), "stratify build " + world + " --box 1e6",
                                   "stratify build " + world + " --resolution 0", "stratify build " + world + " --sizing foo",
                                   "stratify build " + world + " --alpha 0", "stratify build " + world + " --along " + dir.file("none.path"),
+                                  "stratify build " + world + " --screen tall", "stratify build " + world + " --screen 480:0",
+                                  "stratify build " + world + " --screen 4000:10", "stratify build " + world + " --screen 480 --resolution 64",
+                                  "stratify build " + world + " --far-level-texels -1",
                                   "walk " + world + " --path " + test::source_path("tests/data/seeds/three.path") +
                                       " --strategy stratified:show=nothing"}) {
     const test::CommandResult r = test::run_cellwalk(args);

@@ -133,6 +133,53 @@ TEST_F(StratifiedSystem, MeasuredFarAngleIsZeroAtTheCentreAndWithinTheCheckersBo
   EXPECT_GT(largest, 0.2 * stored.params().alpha);  // the corners do see parallax
 }
 
+// Every 9th cell of the stored partition baked with `settings`; `triangles` gets what it drew.
+std::vector<CellFarField> bake_cells(const World& world, const StoredStratified& stored, const BakeSettings& settings,
+                                     uint64_t& triangles) {
+  FarFieldBaker baker(world, settings);
+  std::vector<CellFarField> fields;
+  for (CellId c = 0; c < stored.partition().cell_count(); c += 9)
+    fields.push_back(baker.bake(stored.partition().cell(c).box.center(), kBox, stored.near(c)));
+  triangles = baker.triangles_drawn();
+  return fields;
+}
+
+// The fraction of texels whose object differs between two bakes of the same cells.
+double differing_ids(const std::vector<CellFarField>& a, const std::vector<CellFarField>& b) {
+  uint64_t differing = 0, texels = 0;
+  EXPECT_EQ(a.size(), b.size());
+  for (size_t c = 0; c < std::min(a.size(), b.size()); ++c) {
+    EXPECT_EQ(a[c].faces.size(), b[c].faces.size()) << "cell " << c;
+    for (size_t f = 0; f < std::min(a[c].faces.size(), b[c].faces.size()); ++f)
+      for (size_t t = 0; t < a[c].faces[f].ids.ids.size(); ++t) {
+        differing += a[c].faces[f].ids.ids[t] != b[c].faces[f].ids.ids[t];
+        ++texels;
+      }
+  }
+  return texels ? double(differing) / double(texels) : 1.0;
+}
+
+TEST_F(StratifiedSystem, FarObjectsAtLevelsUnderHalfATexelShowTheSameFaces) {
+  // Oracle: the thesis's bake, every far object at full detail. Levels whose error covers under
+  // half a texel draw fewer triangles and nearly the same faces; levels far past it do not.
+  const StoredStratified stored(*world_);
+  uint64_t full_triangles = 0, fine_triangles = 0, coarse_triangles = 0;
+  const auto full = bake_cells(*world_, stored, {.resolution = kResolution, .max_texels = 0.0f}, full_triangles);
+  const auto fine = bake_cells(*world_, stored, {.resolution = kResolution, .max_texels = 0.5f}, fine_triangles);
+  const auto coarse = bake_cells(*world_, stored, {.resolution = kResolution, .max_texels = 200.0f}, coarse_triangles);
+  EXPECT_LT(fine_triangles, full_triangles);
+  EXPECT_LT(coarse_triangles, fine_triangles);
+  const double fine_differs = differing_ids(full, fine), coarse_differs = differing_ids(full, coarse);
+  EXPECT_LT(fine_differs, 0.01);
+  EXPECT_GT(coarse_differs, 2 * fine_differs);
+  // The fixture's context draws again after the bakers' contexts are gone.
+  Camera camera;
+  apply(city_path().frames[0], camera);
+  Renderer renderer(RenderSettings{});
+  renderer.render(camera, std::vector<DrawItem>{}, [](const DrawItem&) -> const Mesh* { return nullptr; });
+  EXPECT_GT(render_frame(*make_strategy("brute", *world_, StrategyOptions{}), renderer, camera).triangles, 0u);
+}
+
 TEST_F(StratifiedSystem, FaceQuadMatchesItsCamera) {
   const Vec3 c(10.0f, 1.7f, -20.0f);
   for (int face = 0; face < kFaceCount; ++face) {
@@ -333,11 +380,16 @@ TEST(StratifiedBench, WritesReportWithSaneFigures) {
   p.work_dir = dir.file("work");
   p.command_line = "cellwalk bench stratified --blocks-x 3";
   p.path_seeds = {3};
+  p.scale_blocks = 4;
+  p.scale_frames = 30;
+  p.scale_others_every = 4;
+  p.scale_fidelity_every = 10;
+  p.scale_strategies = {"lod"};
   const nlohmann::ordered_json s = run_stratified_bench(p);
   const std::filesystem::path out = p.out_dir;
   const std::vector<uint8_t> bytes = test::slurp((out / "stratified.md").string());
   const std::string md(bytes.begin(), bytes.end());
-  for (const char* heading : {"## Table 6.1", "## Frame time", "## Fidelity"}) EXPECT_NE(md.find(heading), std::string::npos) << heading;
+  for (const char* heading : {"## Table 6.1", "## Frame time", "## Fidelity", "## At city scale"}) EXPECT_NE(md.find(heading), std::string::npos) << heading;
   EXPECT_NE(md.find(p.command_line), std::string::npos);
   for (const char* file : {"table61.csv", "frames.csv", "frame-times-seed3.svg"})
     EXPECT_GT(std::filesystem::file_size(out / "stratified" / file), 0u) << file;
@@ -351,6 +403,15 @@ TEST(StratifiedBench, WritesReportWithSaneFigures) {
   EXPECT_LT(fine, coarse);
   EXPECT_LT(coarse, 10.0 * 1.1 + 90.0 / 32);  // the checker's few per cent and half a texel
   EXPECT_LT(fine, 2.0 * 1.1 + 90.0 / 32);
+  // At city scale: a larger world; stratified draws every frame, the others every 4th and the
+  // compared ones (frames 0, 4, 8, 10, 12, 16, 20, 24, 28: 9 of 30).
+  const auto& scale = s["scale"];
+  EXPECT_GT(scale["triangles"].get<uint64_t>(), s["world"]["triangles"].get<uint64_t>());
+  EXPECT_EQ(scale["walks"]["stratified-10.0"]["frames"], 30);
+  EXPECT_EQ(scale["walks"]["brute"]["frames"], 9);
+  EXPECT_EQ(scale["walks"]["lod"]["frames"], 9);
+  EXPECT_DOUBLE_EQ(scale["walks"]["brute"]["speedup"].get<double>(), 1.0);
+  EXPECT_GT(scale["walks"]["lod"]["visible"].get<uint64_t>(), 0u);
 }
 
 }  // namespace

@@ -191,8 +191,36 @@ struct BuildOptions {
   double box = 330.0;      // Table 6.1
   std::string sizing = "eq22";
   int resolution = 512;
+  float far_level_texels = stratified::BakeSettings{}.max_texels;
+  std::string screen;  // "H[:FOV]": the resolution from the screen
   bool json = false;
 };
+
+// --screen H[:FOV]: the face resolution at which a texel covers at most a pixel of that screen.
+int resolution_for_screen(const std::string& screen) {
+  const size_t colon = screen.find(':');
+  const auto number = [&](const std::string& text) {
+    size_t used = 0;
+    double value = 0.0;
+    try {
+      value = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0 || used != text.size())
+      fail("stratify build", "--screen " + screen + ": give the screen's height in pixels and, after a colon, its vertical field of view in degrees (e.g. 1080:60)");
+    return value;
+  };
+  const double height = number(screen.substr(0, colon));
+  const double fov = colon == std::string::npos ? 60.0 : number(screen.substr(colon + 1));
+  if (height != std::floor(height) || height > 1e5)
+    fail("stratify build", "--screen " + screen + ": the height must be a whole number of pixels up to 100000");
+  const int resolution = face_resolution_for_screen(int(height), rad(fov));
+  if (resolution > kMaxFaceResolution)
+    fail("stratify build", "--screen " + screen + " needs " + std::to_string(resolution) + "² faces, over the largest, " +
+                               std::to_string(kMaxFaceResolution) + "²: give a wider field of view or --resolution");
+  return resolution;
+}
 
 // v for the options, sized against the world's extent (Eq. 2.2 takes the model length l).
 double build_side(const BuildOptions& o, const World& world) {
@@ -205,7 +233,8 @@ double build_side(const BuildOptions& o, const World& world) {
   return viewcell_side(sizing, rad(o.alpha_deg), o.box, model);
 }
 
-void run_build(const BuildOptions& o) {
+void run_build(BuildOptions o) {
+  if (!o.screen.empty()) o.resolution = resolution_for_screen(o.screen);
   const std::string out = o.out.empty() ? o.world : o.out;
   refuse_same_files({}, {out});
   const World world(o.world);
@@ -220,7 +249,7 @@ void run_build(const BuildOptions& o) {
     cells.partition = visibility::cells_along(*cells.partition, path, o.along_margin);
   }
   const double cells_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  FarFieldBaker baker(world, o.resolution);
+  FarFieldBaker baker(world, {.resolution = o.resolution, .max_texels = o.far_level_texels});
   std::unique_ptr<Progress> progress;
   const StratifiedParams params{float(rad(o.alpha_deg)), v, float(o.box), o.sizing, o.resolution};
   const StratifiedSizes sizes = write_world_with_stratified(
@@ -235,11 +264,12 @@ void run_build(const BuildOptions& o) {
   const uint64_t stored = sizes.color_bytes + sizes.id_bytes + sizes.depth_bytes;
   if (o.json) {
     const Json j = {{"output", out}, {"alpha_deg", o.alpha_deg}, {"v", v}, {"b", o.box}, {"sizing", o.sizing},
-                    {"resolution", o.resolution}, {"cells", sizes.cells}, {"baked_cells", sizes.baked_cells},
+                    {"resolution", o.resolution}, {"far_level_texels", o.far_level_texels}, {"cells", sizes.cells}, {"baked_cells", sizes.baked_cells},
                     {"kd_height", cells.height}, {"peak_held_ids", cells.peak_held_ids}, {"near_ids", sizes.near_ids},
                     {"near_bytes", sizes.near_bytes}, {"faces", sizes.faces}, {"raw_face_bytes", sizes.raw_face_bytes},
                     {"color_bytes", sizes.color_bytes}, {"id_bytes", sizes.id_bytes}, {"depth_bytes", sizes.depth_bytes},
-                    {"cells_seconds", cells_s}, {"bake_seconds", sizes.bake_seconds}, {"bake_ms_per_cell", per_cell_ms}};
+                    {"cells_seconds", cells_s}, {"bake_seconds", sizes.bake_seconds}, {"bake_ms_per_cell", per_cell_ms},
+                    {"bake_triangles_per_cell", sizes.baked_cells ? baker.triangles_drawn() / sizes.baked_cells : 0}};
     print_json("stratify build", j);
     return;
   }
@@ -249,9 +279,10 @@ void run_build(const BuildOptions& o) {
   std::printf("  near lists: %.1f objects a cell on average, %llu bytes; built in %.2f s (peak %llu ids held)\n",
               sizes.cells ? double(sizes.near_ids) / sizes.cells : 0.0, (unsigned long long)sizes.near_bytes, cells_s,
               (unsigned long long)cells.peak_held_ids);
-  std::printf("  far faces %d²: %.1f MiB stored (colour %.1f, ids %.1f, depth %.1f) of %.1f MiB raw; %.0f ms a cell\n",
+  std::printf("  far faces %d²: %.1f MiB stored (colour %.1f, ids %.1f, depth %.1f) of %.1f MiB raw; %.0f ms and %llu triangles a cell\n",
               o.resolution, stored / 1048576.0, sizes.color_bytes / 1048576.0, sizes.id_bytes / 1048576.0,
-              sizes.depth_bytes / 1048576.0, sizes.raw_face_bytes / 1048576.0, per_cell_ms);
+              sizes.depth_bytes / 1048576.0, sizes.raw_face_bytes / 1048576.0, per_cell_ms,
+              (unsigned long long)(sizes.baked_cells ? baker.triangles_drawn() / sizes.baked_cells : 0));
   std::printf("  wrote %s\n", out.c_str());
 }
 
@@ -265,8 +296,14 @@ void register_stratify_build(CLI::App& stratify) {
   cmd->add_option("--box", o->box, "Bounding box side b, metres")->check(number_in(0, 1e7, true))->capture_default_str();
   cmd->add_option("--sizing", o->sizing, "How v follows from α and b: eq22 (the thesis), strict or numerical")
       ->check(CLI::IsMember({"eq22", "strict", "numerical"}))->capture_default_str();
-  cmd->add_option("--resolution", o->resolution, "Texels per face side")
+  auto* resolution = cmd->add_option("--resolution", o->resolution, "Texels per face side")
       ->check(CLI::Range(1, kMaxFaceResolution))->capture_default_str();
+  cmd->add_option("--screen", o->screen,
+                  "Derive --resolution from a screen H[:FOV] (pixels high, vertical field in degrees, default 60): one texel at most one pixel")
+      ->excludes(resolution);
+  cmd->add_option("--far-level-texels", o->far_level_texels,
+                  "Far objects are baked at the coarsest level whose error covers under this many texels (0: full detail, as the thesis)")
+      ->check(number_in(0, 1e3))->capture_default_str();
   auto* along = cmd->add_option("--along", o->along, "Bake only the cells near this camera path (cellwalk path); the others are stored as skipped")
       ->check(CLI::ExistingFile);
   cmd->add_option("--along-margin", o->along_margin, "--along: metres around the path whose cells are baked")

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <memory>
 #include <numbers>
+#include <optional>
 
 #include "cellwalk/core/atomic_file.hpp"
 #include "cellwalk/core/camera_path.hpp"
@@ -61,7 +62,7 @@ Config preprocess(const StratifiedBenchParams& p, const World& world, const Came
   Viewcells cells = build_viewcells(default_cell_region(world.info().bounds, world.info().nav, true), c.v, float(p.box), bounds);
   c.cells_s = bench::seconds_since(start);
   cells.partition = visibility::cells_along(*cells.partition, path, p.along_margin);
-  FarFieldBaker baker(world, p.resolution);
+  FarFieldBaker baker(world, {.resolution = p.resolution, .max_texels = p.far_level_texels});
   Progress progress("bench stratified: bake α = " + fixed(alpha_deg, 1) + "°", 0);
   c.sizes = write_world_with_stratified(
       world, file, cells, {float(rad(alpha_deg)), c.v, float(p.box), "eq22", p.resolution},
@@ -83,6 +84,7 @@ struct Walker {
   StratifiedStrategy* stratified = nullptr;  // when it is one
   double alpha = 0;                          // radians, for stratified walkers
   bool images = false;                       // writes its images of the compared frames
+  int every = 1;                             // draws every `every`-th frame and the compared ones
   std::vector<FrameStats> frames;
   std::vector<double> angles;                // far angle per frame (stratified)
   std::vector<bool> crossings;
@@ -102,7 +104,9 @@ Walker make_walker(const std::string& label, const std::string& file, const std:
   Walker w;
   w.label = label;
   w.world = std::make_unique<World>(file);
-  w.strategy = make_strategy(strategy, *w.world, StrategyOptions{});
+  StrategyOptions options;
+  options.viewport_height_px = float(p.height);  // lod's screen-space error
+  w.strategy = make_strategy(strategy, *w.world, options);
   w.renderer = std::make_unique<Renderer>(render_settings(p));
   w.stratified = dynamic_cast<StratifiedStrategy*>(w.strategy.get());
   w.alpha = alpha;
@@ -112,13 +116,13 @@ Walker make_walker(const std::string& label, const std::string& file, const std:
 // Walks every walker along the path, frame by frame in rotating order, and every k-th frame
 // compares each with one ground-truth rendering.
 void walk_interleaved(std::vector<Walker>& walkers, Walker& truth, const CameraPath& path, const Camera& lens,
-                      const StratifiedBenchParams& p, const fs::path& images, const std::string& prefix) {
+                      int fidelity_every, int images_to_write, const fs::path& images, const std::string& prefix) {
   Camera camera = lens;
   Progress progress("bench stratified: walk", path.frames.size());
   int written = 0;
   for (size_t i = 0; i < path.frames.size(); ++i) {
     apply(path.frames[i], camera);
-    const bool compare = i % size_t(p.fidelity_every) == 0;
+    const bool compare = i % size_t(fidelity_every) == 0;
     Image truth_color;
     IdImage truth_ids;
     if (compare) {
@@ -126,10 +130,11 @@ void walk_interleaved(std::vector<Walker>& walkers, Walker& truth, const CameraP
       truth_color = truth.renderer->read_color();
       truth_ids = truth.renderer->read_ids();
     }
-    const bool write = compare && written < p.images && i > 0;
+    const bool write = compare && written < images_to_write && i > 0;
     if (write) write_png(truth_color, (images / (prefix + "frame" + std::to_string(i) + "-truth.png")).string());
     for (size_t k = 0; k < walkers.size(); ++k) {
       Walker& w = walkers[(i + k) % walkers.size()];
+      if (!compare && i % size_t(w.every) != 0) continue;
       FrameStats stats = render_frame(*w.strategy, *w.renderer, camera, path.frames[i].time);
       stats.frame = int(i);
       w.frames.push_back(stats);
@@ -183,9 +188,10 @@ FrameSummary summarize_frames(const Walker& w) {
   return s;
 }
 
-Table table61(const std::vector<Config>& configs) {
+// thesis: the rows are Table 6.1's configurations A and B, with the thesis's figures beside them.
+Table table61(const std::vector<Config>& configs, bool thesis) {
   Table rows;
-  const char* thesis[][3] = {{"33", "50 min", "4M"}, {"5", "14,000 min (projected)", "1155M (projected)"}};
+  const char* thesis_figures[][3] = {{"33", "50 min", "4M"}, {"5", "14,000 min (projected)", "1155M (projected)"}};
   for (size_t i = 0; i < configs.size(); ++i) {
     const Config& c = configs[i];
     const uint64_t stored = c.sizes.color_bytes + c.sizes.id_bytes + c.sizes.depth_bytes;
@@ -195,7 +201,7 @@ Table table61(const std::vector<Config>& configs) {
                     fixed(1e3 * per_cell_s, 0), fixed(per_cell_s * double(c.cells) / 60.0, 1), fixed(c.cells_s, 2),
                     fixed(per_cell_bytes / 1024.0, 1), fixed(per_cell_bytes * double(c.cells) / kMiB, 1),
                     fixed(c.baked ? double(c.sizes.raw_face_bytes) / double(stored) : 0.0, 1),
-                    i < 2 ? std::string(thesis[i][0]) + " m; " + thesis[i][1] + "; " + thesis[i][2] : "—"});
+                    thesis && i < 2 ? std::string(thesis_figures[i][0]) + " m; " + thesis_figures[i][1] + "; " + thesis_figures[i][2] : "—"});
   }
   return rows;
 }
@@ -213,6 +219,42 @@ const std::vector<std::string> kFidelityHeader = {
     "largest missed, px of truth", "pixel error max px",
     "far angle max (measured)", "α", "frames over α"};
 
+// The rows of one walked path: frame times, fidelity and per-frame figures, and the summary.
+struct Report {
+  Table frames_rows, fidelity_rows, per_frame;
+  Json summary = Json::object();  // path id -> walker label -> figures
+};
+
+// Adds the walkers' figures along path `path_id` to `r`; the first walker is brute force.
+void report_walk(const std::vector<Walker>& walkers, const std::string& path_id, Report& r) {
+  const double brute_ms = summarize_frames(walkers.front()).mean;
+  for (const Walker& w : walkers) {
+    const FrameSummary s = summarize_frames(w);
+    r.frames_rows.push_back({path_id, w.label, fixed(s.mean, 2), fixed(s.sd, 2), fixed(s.p95, 2), fixed(s.max, 2),
+                           fixed(s.mean > 0 ? brute_ms / s.mean : 0.0, 2) + "×", fixed(s.ideal_mean, 2),
+                           std::to_string(s.triangles), std::to_string(s.crossings), std::to_string(s.loads),
+                           fixed(s.max_load, 1)});
+    const FidelitySummary f = summarize(w.fidelity);
+    const double worst = w.angles.empty() ? 0.0 : *std::max_element(w.angles.begin(), w.angles.end());
+    const auto over = std::count_if(w.angles.begin(), w.angles.end(), [&](double a) { return w.stratified && a > w.alpha; });
+    r.fidelity_rows.push_back({path_id, w.label, std::to_string(f.frames),
+                             std::isfinite(f.mean_psnr_db) ? fixed(f.mean_psnr_db, 1) : "inf",
+                             fixed(100 * f.mean_differing_fraction, 3), fixed(100 * f.max_differing_fraction, 3),
+                             std::to_string(f.missed_objects) + " of " + std::to_string(f.visible_objects),
+                             std::to_string(f.largest_missed_pixels), fixed(f.max_pixel_error_px, 1), w.stratified ? fixed(deg(worst), 2) + "°" : "—",
+                             w.stratified ? fixed(deg(w.alpha), 1) + "°" : "—", w.stratified ? std::to_string(over) : "—"});
+    r.summary[path_id][w.label] = {
+        {"frames", w.frames.size()}, {"frame_ms", s.mean}, {"speedup", s.mean > 0 ? brute_ms / s.mean : 0.0}, {"triangles", s.triangles},
+        {"crossings", s.crossings}, {"stall_frames", s.loads}, {"max_far_angle_deg", deg(worst)}, {"frames_over_alpha", over},
+        {"psnr_db", std::isfinite(f.mean_psnr_db) ? Json(f.mean_psnr_db) : Json(nullptr)},
+        {"missed", f.missed_objects}, {"visible", f.visible_objects}};
+    for (size_t i = 0; i < w.frames.size(); ++i)
+      r.per_frame.push_back({path_id, w.label, std::to_string(w.frames[i].frame), fixed(w.frames[i].frame_ms, 3),
+                           std::to_string(w.frames[i].triangles), w.crossings[i] ? "1" : "0",
+                           fixed(w.frames[i].io_ms + w.frames[i].decode_ms, 3), fixed(deg(w.angles[i]), 4)});
+  }
+}
+
 std::string frame_times_svg(const std::vector<Walker>& walkers, const std::string& path_name) {
   LinePlot plot;
   plot.title = "Frame time along " + path_name + " (Figs. 6-1, 6-2)";
@@ -226,11 +268,87 @@ std::string frame_times_svg(const std::vector<Walker>& walkers, const std::strin
   return render_svg(plot);
 }
 
+
+// The city-scale run's world, path and preprocessing.
+struct ScaleCity {
+  std::string world_file;
+  uint64_t objects = 0, triangles = 0;
+  Vec3 size{0.0f};
+  double build_s = 0;
+  CameraPath path;
+  Config config;
+};
+
+std::optional<ScaleCity> make_scale_city(const StratifiedBenchParams& p, const bench::WorkDir& dir) {
+  if (p.scale_blocks <= 0) return std::nullopt;
+  ScaleCity s;
+  StratifiedCityParams city = p.city;
+  city.blocks_x = city.blocks_z = p.scale_blocks;
+  s.world_file = dir.file("scale.cww");
+  bench::WorldBuild build;
+  build.progress_label = "bench stratified: build the city-scale world";
+  s.build_s = bench::make_bench_world(city, build, dir.file("scale.cwscene"), s.world_file).seconds;
+  const World world(s.world_file);
+  s.objects = world.object_count();
+  s.triangles = world.triangle_count();
+  s.size = world.info().bounds.size();
+  PathParams path_params;
+  path_params.kind = parse_session_kind(p.scale_path_kind);
+  path_params.frames = p.scale_frames;
+  path_params.seed = p.path_seeds.empty() ? 1 : p.path_seeds.front();
+  s.path = generate_path(world.info().nav, path_params);
+  const double alpha = p.alphas_deg.front();
+  s.config = preprocess(p, world, s.path, alpha, dir.file("scale-alpha" + fixed(alpha, 1) + ".cww"));
+  return s;
+}
+
+// Brute force, the scale strategies and stratified at the first α along the scale path,
+// interleaved frame by frame; the figures go to `r` under the path id "scale".
+void walk_scale_city(const StratifiedBenchParams& p, const ScaleCity& s, const Camera& lens, const fs::path& sub, Report& r) {
+  std::vector<Walker> walkers;
+  walkers.push_back(make_walker("brute", s.world_file, "brute", p, 0.0));
+  for (const std::string& name : p.scale_strategies) walkers.push_back(make_walker(name, s.world_file, name, p, 0.0));
+  for (Walker& w : walkers) w.every = p.scale_others_every;
+  walkers.push_back(make_walker("stratified-" + fixed(s.config.alpha_deg, 1), s.config.file, "stratified", p, rad(s.config.alpha_deg)));
+  walkers.back().images = true;
+  Walker truth = make_walker("truth", s.world_file, "ground-truth", p, 0.0);
+  walk_interleaved(walkers, truth, s.path, lens, p.scale_fidelity_every, p.images, sub, "scale-");
+  report_walk(walkers, "scale", r);
+  write_file_atomically((sub / "frame-times-scale.svg").string(), frame_times_svg(walkers, p.scale_path_kind + " path at city scale"));
+}
+
+std::string scale_markdown(const StratifiedBenchParams& p, const ScaleCity& s, const Report& r) {
+  std::string md = "\n## At city scale\n\n";
+  md += "The same generator with " + std::to_string(p.scale_blocks) + " × " + std::to_string(p.scale_blocks) + " blocks: " +
+        fixed(s.size.x, 0) + " × " + fixed(s.size.z, 0) + " × " + fixed(s.size.y, 0) + " m, " + std::to_string(s.objects) +
+        " objects, " + std::to_string(s.triangles) + " triangles, built in " + fixed(s.build_s, 1) + " s. One " +
+        p.scale_path_kind + " path of " + std::to_string(s.path.frames.size()) + " frames. Stratified (with its prefetch) "
+        "draws every frame, so its crossings and stall frames count the whole path; brute force and the " +
+        std::to_string(p.scale_strategies.size()) + " other strategies, at about a second a frame, draw every " +
+        std::to_string(p.scale_others_every) + "th frame, interleaved with it, and every strategy draws the frames compared "
+        "with ground truth (every " + std::to_string(p.scale_fidelity_every) + "th). Only the cells within " +
+        fixed(p.along_margin, 0) + " m of the path are baked.\n\n";
+  md += bench::md_table(kTable61Header, table61({s.config}, false), bench::Align::kFigures);
+  md += "\n" + bench::md_table(kFramesHeader, r.frames_rows, bench::Align::kFigures);
+  md += "\n![frame times at city scale](stratified/frame-times-scale.svg)\n\n";
+  md += bench::md_table(kFidelityHeader, r.fidelity_rows, bench::Align::kFigures);
+  const Json& walks = r.summary["scale"];
+  const std::string strat = "stratified-" + fixed(s.config.alpha_deg, 1);
+  md += "\nStratified's speed-up over each, same run:";
+  for (const auto& [label, w] : walks.items())
+    if (label != strat)
+      md += " " + label + " " + fixed(w["frame_ms"].get<double>() / walks[strat]["frame_ms"].get<double>(), 2) + "×;";
+  md.back() = '.';
+  md += "\n";
+  return md;
+}
+
 }  // namespace
 
 Json run_stratified_bench(const StratifiedBenchParams& p) {
   if (p.alphas_deg.empty()) fail("bench stratified", "give at least one --alpha");
   if (p.fidelity_every < 1 || p.frames < 1) fail("bench stratified", "--frames and --fidelity-every must be at least 1");
+  for (const std::string& name : p.scale_strategies) check_strategy_name(name);
   const bench::Clock::time_point start = bench::Clock::now();
   const bench::WorkDir dir(p.work_dir, "stratified");
   const std::string world_file = dir.file("city.cww");
@@ -252,6 +370,7 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
   std::vector<Config> configs;
   for (const double a : p.alphas_deg)
     configs.push_back(preprocess(p, world, every_path, a, dir.file("city-alpha" + fixed(a, 1) + ".cww")));
+  const std::optional<ScaleCity> scale = make_scale_city(p, dir);
 
   const std::unique_ptr<GlContext> context = GlContext::headless();
   Camera lens;
@@ -259,8 +378,7 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
   lens.aspect = float(p.width) / float(p.height);
   const fs::path out = fs::path(p.out_dir), sub = out / "stratified";
   fs::create_directories(sub);
-  Table frames_rows, fidelity_rows, per_frame;
-  Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}}, {"paths", Json::object()}};
+  Report report;
   for (const auto& [seed, path] : paths) {
     const std::string path_name = p.path_kind + " path, seed " + std::to_string(seed);
     std::vector<Walker> walkers;
@@ -274,37 +392,16 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
       walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1) + "-noprefetch", c.file, "stratified:prefetch=0", p,
                                     rad(c.alpha_deg)));
     Walker truth = make_walker("truth", world_file, "ground-truth", p, 0.0);
-    walk_interleaved(walkers, truth, path, lens, p, sub, "seed" + std::to_string(seed) + "-");
-    const double brute_ms = summarize_frames(walkers.front()).mean;
-    for (const Walker& w : walkers) {
-      const FrameSummary s = summarize_frames(w);
-      frames_rows.push_back({std::to_string(seed), w.label, fixed(s.mean, 2), fixed(s.sd, 2), fixed(s.p95, 2), fixed(s.max, 2),
-                             fixed(s.mean > 0 ? brute_ms / s.mean : 0.0, 2) + "×", fixed(s.ideal_mean, 2),
-                             std::to_string(s.triangles), std::to_string(s.crossings), std::to_string(s.loads),
-                             fixed(s.max_load, 1)});
-      const FidelitySummary f = summarize(w.fidelity);
-      const double worst = w.angles.empty() ? 0.0 : *std::max_element(w.angles.begin(), w.angles.end());
-      const auto over = std::count_if(w.angles.begin(), w.angles.end(), [&](double a) { return w.stratified && a > w.alpha; });
-      fidelity_rows.push_back({std::to_string(seed), w.label, std::to_string(f.frames),
-                               std::isfinite(f.mean_psnr_db) ? fixed(f.mean_psnr_db, 1) : "inf",
-                               fixed(100 * f.mean_differing_fraction, 3), fixed(100 * f.max_differing_fraction, 3),
-                               std::to_string(f.missed_objects) + " of " + std::to_string(f.visible_objects),
-                               std::to_string(f.largest_missed_pixels), fixed(f.max_pixel_error_px, 1), w.stratified ? fixed(deg(worst), 2) + "°" : "—",
-                               w.stratified ? fixed(deg(w.alpha), 1) + "°" : "—", w.stratified ? std::to_string(over) : "—"});
-      summary["paths"][std::to_string(seed)][w.label] = {
-          {"frame_ms", s.mean}, {"speedup", s.mean > 0 ? brute_ms / s.mean : 0.0}, {"triangles", s.triangles},
-          {"crossings", s.crossings}, {"stall_frames", s.loads}, {"max_far_angle_deg", deg(worst)}, {"frames_over_alpha", over},
-          {"psnr_db", std::isfinite(f.mean_psnr_db) ? Json(f.mean_psnr_db) : Json(nullptr)},
-          {"missed", f.missed_objects}, {"visible", f.visible_objects}};
-      for (size_t i = 0; i < w.frames.size(); ++i)
-        per_frame.push_back({std::to_string(seed), w.label, std::to_string(w.frames[i].frame), fixed(w.frames[i].frame_ms, 3),
-                             std::to_string(w.frames[i].triangles), w.crossings[i] ? "1" : "0",
-                             fixed(w.frames[i].io_ms + w.frames[i].decode_ms, 3), fixed(deg(w.angles[i]), 4)});
-    }
+    walk_interleaved(walkers, truth, path, lens, p.fidelity_every, p.images, sub, "seed" + std::to_string(seed) + "-");
+    report_walk(walkers, std::to_string(seed), report);
     write_file_atomically((sub / ("frame-times-seed" + std::to_string(seed) + ".svg")).string(), frame_times_svg(walkers, path_name));
   }
-  const Table t61 = table61(configs);
+  Report scale_report;
+  if (scale) walk_scale_city(p, *scale, lens, sub, scale_report);
+  const Table t61 = table61(configs, true);
   bench::write_csv(sub / "table61.csv", kTable61Header, t61);
+  Table per_frame = report.per_frame;
+  per_frame.insert(per_frame.end(), scale_report.per_frame.begin(), scale_report.per_frame.end());
   bench::write_csv(sub / "frames.csv",
                    {"path_seed", "strategy", "frame", "frame_ms", "triangles", "crossing", "load_ms", "far_angle_deg"}, per_frame);
 
@@ -323,7 +420,7 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         "sees much). Only the cells within " + fixed(p.along_margin, 0) +
         " m of the paths are baked; preprocessing and storage for every cell are projected from the measured rate.\n\n";
   md += "## Table 6.1\n\n" + bench::md_table(kTable61Header, t61, bench::Align::kFigures);
-  md += "\n## Frame time (Figs. 6-1 to 6-3)\n\n" + bench::md_table(kFramesHeader, frames_rows, bench::Align::kFigures);
+  md += "\n## Frame time (Figs. 6-1 to 6-3)\n\n" + bench::md_table(kFramesHeader, report.frames_rows, bench::Align::kFigures);
   for (const auto& [seed, path] : paths)
     md += "\n![frame times, seed " + std::to_string(seed) + "](stratified/frame-times-seed" + std::to_string(seed) + ".svg)\n";
   md += "\n`-noprefetch` is the thesis's run time: a crossing loads the "
@@ -331,12 +428,16 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         "Without the suffix, a thread loads the cells the viewer's velocity reaches within 1.5 s, so a crossing finds its "
         "cell loaded; a stall frame is one that had to load its cell or wait for the prefetcher.\n";
   md += "\n## Fidelity against ground truth, and the far field's angular error\n\n" +
-        bench::md_table(kFidelityHeader, fidelity_rows, bench::Align::kFigures);
+        bench::md_table(kFidelityHeader, report.fidelity_rows, bench::Align::kFigures);
   md += "\nEvery " + std::to_string(p.fidelity_every) +
         "th frame is compared. The far angle is measured on every frame: the largest angle, over the far texels in view, "
         "between where the far point is (from the stored depth) and where its face shows it, seen from the eye. "
         "Difference images (128 + test − truth, the thesis's Figs. 6-4 to 6-7) are in `stratified/frame*-diff.png`.\n";
+  if (scale) md += scale_markdown(p, *scale, scale_report);
   write_file_atomically((out / "stratified.md").string(), md);
+  Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}}, {"paths", report.summary}};
+  if (scale)
+    summary["scale"] = {{"objects", scale->objects}, {"triangles", scale->triangles}, {"walks", scale_report.summary["scale"]}};
   return summary;
 }
 

@@ -8,6 +8,8 @@
 //              by frame, each with its own renderer: frame time (Figs. 6-1, 6-2; and with the
 //              crossing loads taken out, Fig. 6-3's "ideal" curve), triangles, crossings, the
 //              frames that loaded a cell;
+//   scale      optionally, the same on a city of 10^7 triangles or more, where brute force cannot
+//              keep up: stratified against brute, conv and lod in one interleaved walk;
 //   fidelity   every k-th frame against ground truth: PSNR, differing pixels, missed objects,
 //              pixel error, and the far field's angular error measured from the baked depth
 //              against α on every frame; difference images (128 + test − truth, Figs. 6-4 to
@@ -39,6 +41,20 @@ struct StratifiedBenchParams {
   double fov_deg = 90.0;
   int fidelity_every = 10;
   int images = 2;             // frames per path whose truth, test and difference images are written
+  float far_level_texels = 0.5f;  // far objects baked at levels under this error (0: full detail)
+  // City scale [issue 17]: > 0 also walks a city of scale_blocks × scale_blocks blocks (60: about
+  // 10^7 triangles) along one path of scale_path_kind, with brute, the strategies in
+  // scale_strategies and stratified at the first α, interleaved.
+  int scale_blocks = 0;
+  std::string scale_path_kind = "normal";
+  // A normal path crosses few cells a second: a long one, with the slow strategies (a second a
+  // frame at 10^7) drawn on every scale_others_every-th frame and stratified on every frame, so
+  // its crossings and stalls are counted on the whole path. Compared with ground truth every
+  // scale_fidelity_every-th frame (every strategy draws those).
+  int scale_frames = 1800;
+  int scale_others_every = 12;
+  int scale_fidelity_every = 60;
+  std::vector<std::string> scale_strategies = {"conv", "lod"};
   std::string out_dir = "docs/results";
   std::string work_dir;       // empty = a temporary directory, removed at the end
   std::string command_line;

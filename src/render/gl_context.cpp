@@ -87,9 +87,13 @@ class EglContext : public GlContext {
       throw;
     }
   }
+  // Makes current again the context that was current when this one was made (nested contexts,
+  // such as a far-field baker's inside a walk, must be destroyed in reverse order of making).
   ~EglContext() override {
     if (eglGetCurrentContext() == context_) {
-      eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+      if (previous_.context == EGL_NO_CONTEXT ||
+          !eglMakeCurrent(previous_.display, previous_.draw, previous_.read, previous_.context))
+        eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     }
     eglDestroyContext(display_, context_);
     SurfacelessDisplay::release();
@@ -130,14 +134,24 @@ class EglContext : public GlContext {
       fail(kWhere, "cannot create an OpenGL 4.5 core context: " + egl_error_text() +
                        " (needs Mesa 20 or newer)");
     }
+    previous_ = {eglGetCurrentDisplay(), eglGetCurrentSurface(EGL_DRAW), eglGetCurrentSurface(EGL_READ),
+                 eglGetCurrentContext()};
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_)) {
       eglDestroyContext(display_, context_);
       fail(kWhere, "cannot make the OpenGL context current: " + egl_error_text());
     }
   }
 
+  // The EGL binding current before this context was made.
+  struct Binding {
+    EGLDisplay display = EGL_NO_DISPLAY;
+    EGLSurface draw = EGL_NO_SURFACE, read = EGL_NO_SURFACE;
+    EGLContext context = EGL_NO_CONTEXT;
+  };
+
   EGLDisplay display_;
   EGLContext context_ = EGL_NO_CONTEXT;
+  Binding previous_;
 };
 
 }  // namespace

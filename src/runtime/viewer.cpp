@@ -18,8 +18,8 @@
 #include "cellwalk/render/window.hpp"
 #include "cellwalk/systems/stratified/stratified_strategy.hpp"
 #include "cellwalk/lod/screen_error.hpp"
+#include "cellwalk/store/level_choice.hpp"
 #include "core/stopwatch.hpp"
-#include "systems/brute/brute.hpp"
 
 namespace cellwalk {
 namespace {

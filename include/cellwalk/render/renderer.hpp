@@ -25,7 +25,9 @@ namespace cellwalk {
 // (LP_NUM_THREADS=0, unless the user set it). Measured no slower at a walk's sizes.
 enum class Rasteriser { kWorkerThreads, kCallingThread };
 
-// A current OpenGL 4.5 core context. Creating one makes it current on the calling thread.
+// A current OpenGL 4.5 core context. Creating one makes it current on the calling thread;
+// destroying it makes current again the headless context that was current before (contexts
+// nest: destroy them in reverse order of making).
 class GlContext {
  public:
   virtual ~GlContext() = default;

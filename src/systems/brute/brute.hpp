@@ -23,11 +23,6 @@ struct LodBaselineConfig {
 bool is_lod_strategy_name(const std::string& name);
 LodBaselineConfig parse_lod_strategy_name(const std::string& name);
 
-// The coarsest level of `object` whose worst screen-space error seen from `eye` (anywhere in
-// a frustum of `lens`) is under `max_px`; level 0 when none is. Levels' errors grow with
-// their index (LOD chains are ordered finest first).
-uint32_t level_for_screen_error(const World& world, ObjectId id, const Vec3& eye, const Lens& lens, float max_px);
-
 class BruteStrategy : public Strategy {
  public:
   // cull = false draws every object whatever the view: the fidelity harness's ground truth.

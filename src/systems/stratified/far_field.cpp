@@ -9,6 +9,7 @@
 #include <string>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/store/level_choice.hpp"
 
 namespace cellwalk::stratified {
 namespace {
@@ -76,20 +77,27 @@ double far_field_angle(const CellFarField& field, const Vec3& c, float b, const 
 struct FarFieldBaker::Impl {
   const World& world;
   int resolution;
+  float max_texels;
+  Lens lens;  // a face's: 90° square, `resolution` texels high
   std::unique_ptr<GlContext> context;
   std::unique_ptr<Renderer> renderer;
   Mesh mesh;  // the provider's last decoded mesh: valid until the next call
   std::vector<DrawItem> items;
   float far_plane;
+  uint64_t triangles_drawn = 0;
 
-  Impl(const World& w, int res, uint64_t budget) : world(w), resolution(res) {
+  Impl(const World& w, const BakeSettings& s) : world(w), resolution(s.resolution), max_texels(s.max_texels) {
+    const int res = s.resolution;
     if (res < 1 || res > kMaxFaceResolution)
       fail("stratify", "face resolution " + std::to_string(res) + " must lie in [1, " + std::to_string(kMaxFaceResolution) + "]");
+    if (!(max_texels >= 0.0f) || !std::isfinite(max_texels))
+      fail("stratify", "the far field's level error bound (" + std::to_string(max_texels) + " texels) must be 0 or more");
+    lens = {glm::radians(90.0f), 1.0f, float(res)};
     context = GlContext::headless();
     RenderSettings settings;
     settings.width = settings.height = res;
     settings.background = kEmpty;
-    settings.gpu_budget_bytes = budget;
+    settings.gpu_budget_bytes = s.gpu_budget_bytes;
     renderer = std::make_unique<Renderer>(settings);
     use_world_textures(*renderer, world);  // far faces show what near geometry shows
     far_plane = 2.0f * glm::length(world.info().bounds.size()) + 10.0f;
@@ -120,13 +128,15 @@ struct FarFieldBaker::Impl {
     for (ObjectId id = 0; id < world.object_count(); ++id) {
       while (next_near < near.size() && near[next_near] < id) ++next_near;
       if (next_near < near.size() && near[next_near] == id) continue;
-      if (frustum.intersects(world.object(id).bounds)) items.push_back({id, 0, world.object(id).color});
+      if (!frustum.intersects(world.object(id).bounds)) continue;
+      const uint32_t level = max_texels > 0.0f ? level_for_screen_error(world, id, c, lens, max_texels) : 0;
+      items.push_back({id, level, world.object(id).color});
     }
     if (items.empty()) return std::nullopt;
-    renderer->render(camera, items, [this](const DrawItem& item) -> const Mesh* {
-      mesh = world.decode_level(item.id, 0, world.read_level(item.id, 0));
+    triangles_drawn += renderer->render(camera, items, [this](const DrawItem& item) -> const Mesh* {
+      mesh = world.decode_level(item.id, item.lod, world.read_level(item.id, item.lod));
       return &mesh;
-    });
+    }).triangles;
     FaceImage image;
     image.face = face;
     image.ids = renderer->read_ids();
@@ -139,12 +149,14 @@ struct FarFieldBaker::Impl {
   }
 };
 
-FarFieldBaker::FarFieldBaker(const World& world, int resolution, uint64_t gpu_budget_bytes)
-    : impl_(std::make_unique<Impl>(world, resolution, gpu_budget_bytes)) {}
+FarFieldBaker::FarFieldBaker(const World& world, const BakeSettings& settings)
+    : impl_(std::make_unique<Impl>(world, settings)) {}
 
 FarFieldBaker::~FarFieldBaker() = default;
 
 int FarFieldBaker::resolution() const { return impl_->resolution; }
+
+uint64_t FarFieldBaker::triangles_drawn() const { return impl_->triangles_drawn; }
 
 CellFarField FarFieldBaker::bake(const Vec3& c, float b, std::span<const ObjectId> near) {
   CellFarField field;

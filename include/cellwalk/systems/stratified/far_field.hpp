@@ -50,19 +50,32 @@ struct CellFarField {
 // the face), both seen from the eye. Radians; 0 when no far texel is in view.
 double far_field_angle(const CellFarField& field, const Vec3& c, float b, const Camera& camera);
 
+// How far faces are drawn.
+struct BakeSettings {
+  int resolution = 512;  // texels per face side
+  // Each far object at the coarsest level whose error, seen from C, covers less than this many
+  // texels anywhere on the face [ours: the thesis draws the full model; a level under half a
+  // texel draws the same image, and at city scale it makes baking many times cheaper]. 0 draws
+  // every object at level 0, as the thesis does.
+  float max_texels = 0.5f;
+  uint64_t gpu_budget_bytes = 256ull << 20;
+};
+
 // Renders far fields with a headless GL context of its own, made on the constructing thread;
-// every call must come from that thread. Objects are drawn at level 0, decoded from the world
-// on demand and kept in the renderer's GPU cache.
+// every call must come from that thread. Objects are decoded from the world on demand and kept
+// in the renderer's GPU cache.
 class FarFieldBaker {
  public:
-  // Throws Error for a resolution outside [1, kMaxFaceResolution] or when no headless context
-  // can be made.
-  FarFieldBaker(const World& world, int resolution, uint64_t gpu_budget_bytes = 256ull << 20);
+  // Throws Error for a resolution outside [1, kMaxFaceResolution], a negative or non-finite
+  // max_texels, or when no headless context can be made.
+  FarFieldBaker(const World& world, const BakeSettings& settings);
   ~FarFieldBaker();
   int resolution() const;
   // The far field of a cell centred at c with box side b: every object not in `near` (ascending
   // ids) whose box meets a face's frustum, drawn from c.
   CellFarField bake(const Vec3& c, float b, std::span<const ObjectId> near);
+  // Triangles drawn by every bake so far (what the level choice saves).
+  uint64_t triangles_drawn() const;
 
  private:
   struct Impl;
