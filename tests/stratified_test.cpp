@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <set>
+#include <sstream>
 
 #include "cellwalk/core/camera_path.hpp"
 #include "cellwalk/core/error.hpp"
@@ -403,6 +405,23 @@ TEST(StratifiedBench, WritesReportWithSaneFigures) {
   EXPECT_LT(fine, coarse);
   EXPECT_LT(coarse, 10.0 * 1.1 + 90.0 / 32);  // the checker's few per cent and half a texel
   EXPECT_LT(fine, 2.0 * 1.1 + 90.0 / 32);
+  // The per-frame CSV shows each crossing and whether it stalled: the thesis's run time stalls
+  // at every crossing.
+  std::ifstream csv(out / "stratified" / "frames.csv");
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "path_seed,strategy,frame,frame_ms,triangles,crossing,stall,load_ms,far_angle_deg");
+  int noprefetch_crossings = 0;
+  while (std::getline(csv, line)) {
+    std::vector<std::string> field;
+    std::stringstream row(line);
+    for (std::string f; std::getline(row, f, ',');) field.push_back(f);
+    ASSERT_EQ(field.size(), 9u) << line;
+    if (field[1] != "stratified-10.0-noprefetch" || field[2] == "0" || field[5] != "1") continue;
+    ++noprefetch_crossings;
+    EXPECT_EQ(field[6], "1") << line;
+  }
+  EXPECT_EQ(noprefetch_crossings, walks["stratified-10.0-noprefetch"]["crossings"].get<int>());
   // At city scale: a larger world; stratified draws every frame, the others every 4th and the
   // compared ones (frames 0, 4, 8, 10, 12, 16, 20, 24, 28: 9 of 30).
   const auto& scale = s["scale"];
