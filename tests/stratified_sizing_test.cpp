@@ -120,7 +120,7 @@ TEST(StratifiedSizing, Eq23GivesTheThesisBox) {
   EXPECT_THROW(box_side_from_budget(fill_bound), Error);
 }
 
-TEST(StratifiedSizing, FaceResolutionForAScreenIsTheSmallestWithATexelWithinAPixel) {
+TEST(StratifiedSizing, FaceResolutionForAScreenIsTheSmallestAsDenseAsItsPixelsAtTheCentre) {
   EXPECT_EQ(face_resolution_for_screen(512, M_PI / 2), 512);  // §5.3's faces for its screen
   for (const int height : {1, 240, 480, 1080, 2160})
     for (const double fov_deg : {20.0, 45.0, 60.0, 90.0, 120.0}) {
@@ -135,6 +135,8 @@ TEST(StratifiedSizing, FaceResolutionForAScreenIsTheSmallestWithATexelWithinAPix
   EXPECT_THROW(face_resolution_for_screen(0, 1.0), Error);
   EXPECT_THROW(face_resolution_for_screen(480, 0.0), Error);
   EXPECT_THROW(face_resolution_for_screen(480, M_PI), Error);
+  EXPECT_THROW(face_resolution_for_screen(1080, 1e-7), Error);  // would overflow an int
+  EXPECT_EQ(face_resolution_for_screen(1, M_PI - 1e-9), 1);
 }
 
 TEST(StratifiedSizing, CellCountsOfTheCampusAndTheCity) {
@@ -274,7 +276,8 @@ TEST(StratifyBuild, BadInputGetsOneLineAndLeavesTheWorldAlone) {
                                   "stratify build " + world + " --resolution 0", "stratify build " + world + " --sizing foo",
                                   "stratify build " + world + " --alpha 0", "stratify build " + world + " --along " + dir.file("none.path"),
                                   "stratify build " + world + " --screen tall", "stratify build " + world + " --screen 480:0",
-                                  "stratify build " + world + " --screen 4000:10", "stratify build " + world + " --screen 480 --resolution 64",
+                                  "stratify build " + world + " --screen 4000:10", "stratify build " + world + " --screen 1080:0.00001",
+                                  "stratify build " + world + " --screen inf", "stratify build " + world + " --screen 480 --resolution 64",
                                   "stratify build " + world + " --far-level-texels -1",
                                   "walk " + world + " --path " + test::source_path("tests/data/seeds/three.path") +
                                       " --strategy stratified:show=nothing"}) {

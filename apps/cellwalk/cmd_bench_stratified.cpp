@@ -34,12 +34,12 @@ void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--path-seed", p.path_seeds, "The paths' seeds, one path each")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--along-margin", p.along_margin, "Cells within this of the path are baked (m)")->capture_default_str()->check(number_in(0, 1e5));
   cmd->add_option("--far-level-texels", p.far_level_texels, "Far objects baked at the coarsest level whose error covers under this many texels (0: full detail)")->capture_default_str()->check(number_in(0, 1e3));
-  cmd->add_option("--scale-blocks", p.scale_blocks, "Also walk a city of N x N blocks (60: about 10^7 triangles) against brute and --scale-strategy; 0: none")->capture_default_str()->check(integer_in(0, 1000));
-  cmd->add_option("--scale-path", p.scale_path_kind, "Path kind at city scale")->capture_default_str()->check(session_kind_check());
-  cmd->add_option("--scale-frames", p.scale_frames, "Frames of the city-scale path")->capture_default_str()->check(integer_in(2, 100000));
-  cmd->add_option("--scale-others-every", p.scale_others_every, "At city scale, brute and the other strategies draw every k-th frame")->capture_default_str()->check(integer_in(1, 100000));
-  cmd->add_option("--scale-fidelity-every", p.scale_fidelity_every, "At city scale, compare every k-th frame with ground truth")->capture_default_str()->check(integer_in(1, 100000));
-  cmd->add_option("--scale-strategy", p.scale_strategies, "Strategies walked beside brute and stratified at city scale")->capture_default_str();
+  auto* scale = cmd->add_option("--scale-blocks", p.scale_blocks, "Also walk a city of N x N blocks (63: about 10^7 triangles) against brute and --scale-strategy; 0: none")->capture_default_str()->check(integer_in(0, 1000));
+  cmd->add_option("--scale-path", p.scale_path_kind, "Path kind at city scale")->capture_default_str()->check(session_kind_check())->needs(scale);
+  cmd->add_option("--scale-frames", p.scale_frames, "Frames of the city-scale path")->capture_default_str()->check(integer_in(2, 100000))->needs(scale);
+  cmd->add_option("--scale-others-every", p.scale_others_every, "At city scale, brute and the other strategies draw every k-th frame")->capture_default_str()->check(integer_in(1, 100000))->needs(scale);
+  cmd->add_option("--scale-fidelity-every", p.scale_fidelity_every, "At city scale, compare every k-th frame with ground truth")->capture_default_str()->check(integer_in(1, 100000))->needs(scale);
+  cmd->add_option("--scale-strategy", p.scale_strategies, "Strategies walked beside brute and stratified at city scale")->capture_default_str()->needs(scale);
   cmd->add_option("--width", p.width, "Image width")->capture_default_str()->check(integer_in(16, 4096));
   cmd->add_option("--height", p.height, "Image height")->capture_default_str()->check(integer_in(16, 4096));
   cmd->add_option("--fov", p.fov_deg, "Vertical field of view, degrees")->capture_default_str()->check(number_in(1, 170));

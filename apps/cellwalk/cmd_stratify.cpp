@@ -213,8 +213,10 @@ int resolution_for_screen(const std::string& screen) {
   };
   const double height = number(screen.substr(0, colon));
   const double fov = colon == std::string::npos ? 60.0 : number(screen.substr(colon + 1));
-  if (height != std::floor(height) || height > 1e5)
-    fail("stratify build", "--screen " + screen + ": the height must be a whole number of pixels up to 100000");
+  if (!(height >= 1 && height <= 1e5) || height != std::floor(height))
+    fail("stratify build", "--screen " + screen + ": the height must be a whole number of pixels from 1 to 100000");
+  if (!(fov >= 1 && fov <= 170))
+    fail("stratify build", "--screen " + screen + ": the field of view must lie between 1° and 170°");
   const int resolution = face_resolution_for_screen(int(height), rad(fov));
   if (resolution > kMaxFaceResolution)
     fail("stratify build", "--screen " + screen + " needs " + std::to_string(resolution) + "² faces, over the largest, " +
@@ -299,7 +301,7 @@ void register_stratify_build(CLI::App& stratify) {
   auto* resolution = cmd->add_option("--resolution", o->resolution, "Texels per face side")
       ->check(CLI::Range(1, kMaxFaceResolution))->capture_default_str();
   cmd->add_option("--screen", o->screen,
-                  "Derive --resolution from a screen H[:FOV] (pixels high, vertical field in degrees, default 60): one texel at most one pixel")
+                  "Derive --resolution from a screen H[:FOV] (pixels high, vertical field in degrees, default 60): texels as dense as its pixels at the view centre")
       ->excludes(resolution);
   cmd->add_option("--far-level-texels", o->far_level_texels,
                   "Far objects are baked at the coarsest level whose error covers under this many texels (0: full detail, as the thesis)")

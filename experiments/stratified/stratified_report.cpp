@@ -8,6 +8,7 @@
 #include <memory>
 #include <numbers>
 #include <optional>
+#include <set>
 
 #include "cellwalk/core/atomic_file.hpp"
 #include "cellwalk/core/camera_path.hpp"
@@ -210,12 +211,12 @@ const std::vector<std::string> kTable61Header = {
     "α", "v (m)", "cells", "baked", "bake ms / cell", "all cells, min (from the rate)", "near lists, s (all cells)",
     "stored KiB / cell", "all cells, MiB", "raw / stored", "thesis: v; preprocessing; storage"};
 
-const std::vector<std::string> kFramesHeader = {"path seed", "strategy", "frame ms mean", "sd", "p95", "max", "speed-up vs brute",
+const std::vector<std::string> kFramesHeader = {"path", "strategy", "frame ms mean", "sd", "p95", "max", "speed-up vs brute",
                                                 "ideal ms (loads out, Fig. 6-3)", "triangles / frame", "crossings",
                                                 "stall frames (loaded a cell)", "largest crossing ms"};
 
 const std::vector<std::string> kFidelityHeader = {
-    "path seed", "strategy", "frames compared", "PSNR dB", "differing pixels mean %", "max %", "missed of visible",
+    "path", "strategy", "frames compared", "PSNR dB", "differing pixels mean %", "max %", "missed of visible",
     "largest missed, px of truth", "pixel error max px",
     "far angle max (measured)", "α", "frames over α"};
 
@@ -225,13 +226,27 @@ struct Report {
   Json summary = Json::object();  // path id -> walker label -> figures
 };
 
-// Adds the walkers' figures along path `path_id` to `r`; the first walker is brute force.
+// The walker's mean frame time over the frames numbered in `frames` that it drew.
+double mean_on(const Walker& w, const std::set<int>& frames) {
+  std::vector<double> ms;
+  for (const FrameStats& f : w.frames)
+    if (frames.count(f.frame)) ms.push_back(f.frame_ms);
+  return bench::mean(ms);
+}
+
+// Adds the walkers' figures along path `path_id` to `r`; the first walker is brute force. A
+// speed-up is over the frames brute force drew (every walker draws those), so walkers that draw
+// more frames are compared on the same ones.
 void report_walk(const std::vector<Walker>& walkers, const std::string& path_id, Report& r) {
-  const double brute_ms = summarize_frames(walkers.front()).mean;
+  std::set<int> brute_frames;
+  for (const FrameStats& f : walkers.front().frames) brute_frames.insert(f.frame);
+  const double brute_ms = mean_on(walkers.front(), brute_frames);
   for (const Walker& w : walkers) {
     const FrameSummary s = summarize_frames(w);
+    const double same_frames_ms = mean_on(w, brute_frames);
+    const double speedup = same_frames_ms > 0 ? brute_ms / same_frames_ms : 0.0;
     r.frames_rows.push_back({path_id, w.label, fixed(s.mean, 2), fixed(s.sd, 2), fixed(s.p95, 2), fixed(s.max, 2),
-                           fixed(s.mean > 0 ? brute_ms / s.mean : 0.0, 2) + "×", fixed(s.ideal_mean, 2),
+                           fixed(speedup, 2) + "×", fixed(s.ideal_mean, 2),
                            std::to_string(s.triangles), std::to_string(s.crossings), std::to_string(s.loads),
                            fixed(s.max_load, 1)});
     const FidelitySummary f = summarize(w.fidelity);
@@ -244,7 +259,8 @@ void report_walk(const std::vector<Walker>& walkers, const std::string& path_id,
                              std::to_string(f.largest_missed_pixels), fixed(f.max_pixel_error_px, 1), w.stratified ? fixed(deg(worst), 2) + "°" : "—",
                              w.stratified ? fixed(deg(w.alpha), 1) + "°" : "—", w.stratified ? std::to_string(over) : "—"});
     r.summary[path_id][w.label] = {
-        {"frames", w.frames.size()}, {"frame_ms", s.mean}, {"speedup", s.mean > 0 ? brute_ms / s.mean : 0.0}, {"triangles", s.triangles},
+        {"frames", w.frames.size()}, {"frame_ms", s.mean}, {"frame_ms_on_brute_frames", same_frames_ms},
+        {"speedup", speedup}, {"triangles", s.triangles},
         {"crossings", s.crossings}, {"stall_frames", s.loads}, {"max_far_angle_deg", deg(worst)}, {"frames_over_alpha", over},
         {"psnr_db", std::isfinite(f.mean_psnr_db) ? Json(f.mean_psnr_db) : Json(nullptr)},
         {"missed", f.missed_objects}, {"visible", f.visible_objects}};
@@ -304,40 +320,61 @@ std::optional<ScaleCity> make_scale_city(const StratifiedBenchParams& p, const b
 
 // Brute force, the scale strategies and stratified at the first α along the scale path,
 // interleaved frame by frame; the figures go to `r` under the path id "scale".
+// "1st", "2nd", "3rd", "12th": for the report's prose.
+std::string ordinal(int n) {
+  const int tens = n % 100, ones = n % 10;
+  const char* suffix = tens >= 11 && tens <= 13 ? "th" : ones == 1 ? "st" : ones == 2 ? "nd" : ones == 3 ? "rd" : "th";
+  return std::to_string(n) + suffix;
+}
+
+std::string stratified_label(double alpha_deg) { return "stratified-" + fixed(alpha_deg, 1); }
+
+// Brute force and the scale strategies on every scale_others_every-th frame and stratified at
+// the first α on every frame, interleaved; then stratified alone along the whole path, whose
+// stall frames are the honest count (interleaved, its prefetcher has the other walkers' slow
+// frames to load in). The figures go to `r` under the path id "scale".
 void walk_scale_city(const StratifiedBenchParams& p, const ScaleCity& s, const Camera& lens, const fs::path& sub, Report& r) {
   std::vector<Walker> walkers;
   walkers.push_back(make_walker("brute", s.world_file, "brute", p, 0.0));
   for (const std::string& name : p.scale_strategies) walkers.push_back(make_walker(name, s.world_file, name, p, 0.0));
   for (Walker& w : walkers) w.every = p.scale_others_every;
-  walkers.push_back(make_walker("stratified-" + fixed(s.config.alpha_deg, 1), s.config.file, "stratified", p, rad(s.config.alpha_deg)));
+  const double alpha = rad(s.config.alpha_deg);
+  walkers.push_back(make_walker(stratified_label(s.config.alpha_deg), s.config.file, "stratified", p, alpha));
   walkers.back().images = true;
   Walker truth = make_walker("truth", s.world_file, "ground-truth", p, 0.0);
   walk_interleaved(walkers, truth, s.path, lens, p.scale_fidelity_every, p.images, sub, "scale-");
+  std::vector<Walker> alone;
+  alone.push_back(make_walker(stratified_label(s.config.alpha_deg) + "-alone", s.config.file, "stratified", p, alpha));
+  walk_interleaved(alone, truth, s.path, lens, int(s.path.frames.size()), 0, sub, "scale-alone-");
+  walkers.push_back(std::move(alone.front()));
   report_walk(walkers, "scale", r);
   write_file_atomically((sub / "frame-times-scale.svg").string(), frame_times_svg(walkers, p.scale_path_kind + " path at city scale"));
 }
 
 std::string scale_markdown(const StratifiedBenchParams& p, const ScaleCity& s, const Report& r) {
+  const Json& walks = r.summary["scale"];
+  const std::string strat = stratified_label(s.config.alpha_deg);
   std::string md = "\n## At city scale\n\n";
   md += "The same generator with " + std::to_string(p.scale_blocks) + " × " + std::to_string(p.scale_blocks) + " blocks: " +
         fixed(s.size.x, 0) + " × " + fixed(s.size.z, 0) + " × " + fixed(s.size.y, 0) + " m, " + std::to_string(s.objects) +
         " objects, " + std::to_string(s.triangles) + " triangles, built in " + fixed(s.build_s, 1) + " s. One " +
-        p.scale_path_kind + " path of " + std::to_string(s.path.frames.size()) + " frames. Stratified (with its prefetch) "
-        "draws every frame, so its crossings and stall frames count the whole path; brute force and the " +
-        std::to_string(p.scale_strategies.size()) + " other strategies, at about a second a frame, draw every " +
-        std::to_string(p.scale_others_every) + "th frame, interleaved with it, and every strategy draws the frames compared "
-        "with ground truth (every " + std::to_string(p.scale_fidelity_every) + "th). Only the cells within " +
+        p.scale_path_kind + " path of " + std::to_string(s.path.frames.size()) + " frames. Brute force takes " +
+        fixed(walks["brute"]["frame_ms"].get<double>() / 1e3, 2) + " s a frame here, so it and the " +
+        std::to_string(p.scale_strategies.size()) + " other strategies draw every " + ordinal(p.scale_others_every) +
+        " frame, interleaved with `" + strat + "`, which draws every frame; every strategy draws the frames compared with "
+        "ground truth (every " + ordinal(p.scale_fidelity_every) + "), and each speed-up is taken over the frames brute "
+        "force drew. Interleaved, stratified's prefetcher has the slow frames to load in, so its stall frames are counted "
+        "again on a walk of its own along the whole path (`" + strat + "-alone`). Only the cells within " +
         fixed(p.along_margin, 0) + " m of the path are baked.\n\n";
   md += bench::md_table(kTable61Header, table61({s.config}, false), bench::Align::kFigures);
   md += "\n" + bench::md_table(kFramesHeader, r.frames_rows, bench::Align::kFigures);
   md += "\n![frame times at city scale](stratified/frame-times-scale.svg)\n\n";
   md += bench::md_table(kFidelityHeader, r.fidelity_rows, bench::Align::kFigures);
-  const Json& walks = r.summary["scale"];
-  const std::string strat = "stratified-" + fixed(s.config.alpha_deg, 1);
-  md += "\nStratified's speed-up over each, same run:";
+  md += "\nStratified's speed-up over each, on the frames they drew, same run:";
   for (const auto& [label, w] : walks.items())
-    if (label != strat)
-      md += " " + label + " " + fixed(w["frame_ms"].get<double>() / walks[strat]["frame_ms"].get<double>(), 2) + "×;";
+    if (label != strat && label != strat + "-alone")
+      md += " " + label + " " +
+            fixed(w["frame_ms_on_brute_frames"].get<double>() / walks[strat]["frame_ms_on_brute_frames"].get<double>(), 2) + "×;";
   md.back() = '.';
   md += "\n";
   return md;
@@ -348,7 +385,13 @@ std::string scale_markdown(const StratifiedBenchParams& p, const ScaleCity& s, c
 Json run_stratified_bench(const StratifiedBenchParams& p) {
   if (p.alphas_deg.empty()) fail("bench stratified", "give at least one --alpha");
   if (p.fidelity_every < 1 || p.frames < 1) fail("bench stratified", "--frames and --fidelity-every must be at least 1");
-  for (const std::string& name : p.scale_strategies) check_strategy_name(name);
+  std::set<std::string> scale_names;
+  for (const std::string& name : p.scale_strategies) {
+    check_strategy_name(name);
+    if (name == "brute" || name == "ground-truth" || name.rfind("stratified", 0) == 0 || !scale_names.insert(name).second)
+      fail("bench stratified", "--scale-strategy " + name + ": brute, ground truth and stratified are walked anyway; give "
+                               "each other strategy once");
+  }
   const bench::Clock::time_point start = bench::Clock::now();
   const bench::WorkDir dir(p.work_dir, "stratified");
   const std::string world_file = dir.file("city.cww");
@@ -403,7 +446,7 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
   Table per_frame = report.per_frame;
   per_frame.insert(per_frame.end(), scale_report.per_frame.begin(), scale_report.per_frame.end());
   bench::write_csv(sub / "frames.csv",
-                   {"path_seed", "strategy", "frame", "frame_ms", "triangles", "crossing", "stall", "load_ms", "far_angle_deg"}, per_frame);
+                   {"path", "strategy", "frame", "frame_ms", "triangles", "crossing", "stall", "load_ms", "far_angle_deg"}, per_frame);
 
   std::string md = "# Stratified rendering: the thesis's experiments (seed 002 §6)\n\n";
   md += "Generated by `" + p.command_line + "` on " + bench::utc_now() + " in " + fixed(bench::seconds_since(start) / 60.0, 1) +
@@ -418,7 +461,11 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         std::to_string(p.path_seeds.size()) + " " + p.path_kind + " paths of " + std::to_string(p.frames) +
         " frames (seeds as in the tables: a path along the city's edge looks out of it and sees little, one through it "
         "sees much). Only the cells within " + fixed(p.along_margin, 0) +
-        " m of the paths are baked; preprocessing and storage for every cell are projected from the measured rate.\n\n";
+        " m of the paths are baked; preprocessing and storage for every cell are projected from the measured rate. " +
+        (p.far_level_texels > 0
+             ? "Far objects are baked at the coarsest level whose error covers under " + fixed(p.far_level_texels, 2) +
+                   " texel (`--far-level-texels`; the thesis drew full detail, `--far-level-texels 0`).\n\n"
+             : std::string("Far objects are baked at full detail, as the thesis did.\n\n"));
   md += "## Table 6.1\n\n" + bench::md_table(kTable61Header, t61, bench::Align::kFigures);
   md += "\n## Frame time (Figs. 6-1 to 6-3)\n\n" + bench::md_table(kFramesHeader, report.frames_rows, bench::Align::kFigures);
   for (const auto& [seed, path] : paths)
@@ -435,7 +482,8 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         "Difference images (128 + test − truth, the thesis's Figs. 6-4 to 6-7) are in `stratified/frame*-diff.png`.\n";
   if (scale) md += scale_markdown(p, *scale, scale_report);
   write_file_atomically((out / "stratified.md").string(), md);
-  Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}}, {"paths", report.summary}};
+  Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}},
+                  {"far_level_texels", p.far_level_texels}, {"paths", report.summary}};
   if (scale)
     summary["scale"] = {{"objects", scale->objects}, {"triangles", scale->triangles}, {"walks", scale_report.summary["scale"]}};
   return summary;

@@ -87,8 +87,9 @@ class EglContext : public GlContext {
       throw;
     }
   }
-  // Makes current again the context that was current when this one was made (nested contexts,
-  // such as a far-field baker's inside a walk, must be destroyed in reverse order of making).
+  // Makes current again the EGL context that was current when this one was made (nested
+  // contexts, such as a far-field baker's inside a walk, must be destroyed in reverse order of
+  // making). A GLFW window's GLX context is not EGL's to see: its owner makes it current again.
   ~EglContext() override {
     if (eglGetCurrentContext() == context_) {
       if (previous_.context == EGL_NO_CONTEXT ||
@@ -121,6 +122,9 @@ class EglContext : public GlContext {
     if (!eglChooseConfig(display_, config_attributes, &config, 1, &count) || count == 0) {
       fail(kWhere, "no EGL configuration supports desktop OpenGL: " + egl_error_text());
     }
+    // What is current for the API bound now (before binding desktop GL): given back at the end.
+    previous_ = {eglGetCurrentDisplay(), eglGetCurrentSurface(EGL_DRAW), eglGetCurrentSurface(EGL_READ),
+                 eglGetCurrentContext()};
     if (!eglBindAPI(EGL_OPENGL_API)) fail(kWhere, "EGL cannot bind desktop OpenGL");
     const EGLint context_attributes[] = {EGL_CONTEXT_MAJOR_VERSION,
                                          4,
@@ -134,8 +138,6 @@ class EglContext : public GlContext {
       fail(kWhere, "cannot create an OpenGL 4.5 core context: " + egl_error_text() +
                        " (needs Mesa 20 or newer)");
     }
-    previous_ = {eglGetCurrentDisplay(), eglGetCurrentSurface(EGL_DRAW), eglGetCurrentSurface(EGL_READ),
-                 eglGetCurrentContext()};
     if (!eglMakeCurrent(display_, EGL_NO_SURFACE, EGL_NO_SURFACE, context_)) {
       eglDestroyContext(display_, context_);
       fail(kWhere, "cannot make the OpenGL context current: " + egl_error_text());

@@ -306,9 +306,11 @@ double preprocessing_seconds(double polygons, double cells, double polygons_per_
 
 int face_resolution_for_screen(int height_px, double fov_y) {
   if (height_px < 1 || !(fov_y > 0.0 && fov_y < std::numbers::pi))
-    fail("stratify", "a screen of " + std::to_string(height_px) + " pixels at " + std::to_string(fov_y * 180.0 / std::numbers::pi) +
-                         "° has no face resolution: give a height of 1 pixel or more and a field of view in (0°, 180°)");
-  return int(std::ceil(double(height_px) / std::tan(0.5 * fov_y) - 1e-9));
+    fail("stratify", "a screen needs a height of 1 pixel or more and a vertical field of view between 0° and 180°");
+  const double r = std::ceil(double(height_px) / std::tan(0.5 * fov_y) - 1e-9);
+  if (!(r <= double(1 << 20)))
+    fail("stratify", "a screen " + std::to_string(height_px) + " pixels high with so narrow a field of view needs faces over 2^20 texels a side");
+  return std::max(1, int(r));
 }
 
 }  // namespace cellwalk::stratified

@@ -131,11 +131,12 @@ struct ShellCosts {
 ShellCosts shell_costs(const ShellPlan& plan, double model_volume, double textures_per_cell,
                        double pixels_per_texture, double bytes_per_pixel, double speed);
 
-// The face resolution at which one texel covers at most one screen pixel [ours; §5.3 fixes
-// 512²]: a 90° face of R texels spans 2/R in tangent at its centre, a screen of H pixels and
-// vertical field θ spans 2·tan(θ/2)/H, so R = ⌈H / tan(θ/2)⌉ (512 for 512 pixels at 90°).
-// Away from the centres both shrink alike, the face's by 1/(1 + x²) and the screen's no faster.
-// Throws Error for H < 1 or θ outside (0, π).
+// The face resolution whose texels are as dense as a screen's pixels at the view centre [ours;
+// §5.3 fixes 512²]: a 90° face of R texels spans 2/R in tangent at its centre, a screen of H
+// pixels and vertical field θ spans 2·tan(θ/2)/H a pixel at its centre, so R = ⌈H / tan(θ/2)⌉
+// (512 for 512 pixels at 90°). Not a bound everywhere: a pixel at the screen's edge looking at a
+// face's centre spans less (by 1/(1 + tan²(θ/2)(1 + aspect²)) at a corner), where a texel may
+// cover 2–4 pixels. Throws Error for H < 1, θ outside (0, π), or an R above 2^20.
 int face_resolution_for_screen(int height_px, double fov_y);
 
 // Eq. 3.2's crossing rate s / v (Table 3.2) and Eq. 3.1's preprocessing time j·n / P_sec.
