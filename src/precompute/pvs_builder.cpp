@@ -3,23 +3,21 @@
 // digest 001 §3.3–§3.4); HDoV thesis §5.5 (per-cell DoV, digest 000 §3.9).
 #include "precompute/pvs_builder.hpp"
 
-#include <fcntl.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
-#include <unistd.h>
 #include <xxhash.h>
 
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
 #include <mutex>
+#include <optional>
 
 #include "cellwalk/core/error.hpp"
 #include "core/bytes.hpp"
+#include "store/checkpoint_file.hpp"
 #include "precompute/sampling_engine.hpp"
 #include "visibility/set_codec.hpp"
 
@@ -111,11 +109,9 @@ std::vector<uint8_t> encode_record(CellId cell, const VisibleSet& set) {
   payload.push_back(set.dov.empty() ? 0 : 1);
   const auto* dov = reinterpret_cast<const uint8_t*>(set.dov.data());
   payload.insert(payload.end(), dov, dov + set.dov.size() * sizeof(float));
-  ByteWriter w;
-  w.put(uint32_t(payload.size()));
-  w.put(XXH3_64bits(payload.data(), payload.size()));
-  w.put_array(std::span<const uint8_t>(payload));
-  return std::move(w.bytes());
+  std::vector<uint8_t> record;
+  append_framed_record(record, payload);
+  return record;
 }
 
 // A part or checkpoint file as read: its header fields, the sets of its intact records, and
@@ -127,12 +123,6 @@ struct ParsedPart {
   CellSets sets;
   uint64_t valid_bytes = 0;
 };
-
-std::vector<uint8_t> read_part_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, std::string("cannot open: ") + std::strerror(errno));
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 // The header; throws Error when it is truncated or damaged. Leaves `r` at the first record.
 ParsedPart parse_header(ByteReader& r, std::span<const uint8_t> bytes) {
@@ -154,12 +144,8 @@ ParsedPart parse_header(ByteReader& r, std::span<const uint8_t> bytes) {
 
 // Records until the first torn or damaged one: everything after it is recomputed.
 void parse_records(ByteReader& r, const std::string& path, uint64_t object_count, ParsedPart& p) {
-  while (r.remaining() >= 12) {
-    const uint32_t len = r.get<uint32_t>("record length");
-    const uint64_t sum = r.get<uint64_t>("record checksum");
-    if (len > r.remaining()) break;
-    const std::vector<uint8_t> payload = r.get_array<uint8_t>(len, "record");
-    if (XXH3_64bits(payload.data(), payload.size()) != sum) break;
+  while (const std::optional<std::vector<uint8_t>> record = next_framed_record(r)) {
+    const std::vector<uint8_t>& payload = *record;
     size_t pos = 0;
     const CellId cell = CellId(get_varint(payload, pos, path));
     VisibleSet set;
@@ -175,7 +161,7 @@ void parse_records(ByteReader& r, const std::string& path, uint64_t object_count
 }
 
 ParsedPart parse_part(const std::string& path, uint64_t object_count) {
-  const std::vector<uint8_t> bytes = read_part_file(path);
+  const std::vector<uint8_t> bytes = read_checkpoint_file(path);
   ByteReader r(bytes, path);
   ParsedPart p = parse_header(r, bytes);
   parse_records(r, path, object_count, p);
@@ -189,7 +175,7 @@ ParsedPart parse_part(const std::string& path, uint64_t object_count) {
 // checkpoint may be worth keeping, and only the user knows.
 ParsedPart resumable_part(const std::string& checkpoint, uint64_t hash, uint64_t object_count) {
   if (!std::filesystem::exists(checkpoint)) return {};
-  const std::vector<uint8_t> bytes = read_part_file(checkpoint);
+  const std::vector<uint8_t> bytes = read_checkpoint_file(checkpoint);
   ByteReader r(bytes, checkpoint);
   ParsedPart p;
   try {
@@ -203,39 +189,6 @@ ParsedPart resumable_part(const std::string& checkpoint, uint64_t hash, uint64_t
   parse_records(r, checkpoint, object_count, p);
   return p;
 }
-
-// Appends records to a checkpoint with one write() each, so a crash tears at most the last.
-class CheckpointWriter {
- public:
-  CheckpointWriter(const std::string& path, uint64_t keep_bytes, std::span<const uint8_t> header) : path_(path) {
-    fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT, 0644);
-    if (fd_ < 0) fail(path, std::string("cannot open for writing: ") + std::strerror(errno));
-    if (::ftruncate(fd_, off_t(keep_bytes)) != 0) fail(path, std::string("cannot truncate: ") + std::strerror(errno));
-    ::lseek(fd_, off_t(keep_bytes), SEEK_SET);
-    if (keep_bytes == 0) write_all(header);
-  }
-  ~CheckpointWriter() {
-    ::fdatasync(fd_);
-    ::close(fd_);
-  }
-  void write_all(std::span<const uint8_t> bytes) {
-    size_t done = 0;
-    while (done < bytes.size()) {
-      const ssize_t n = ::write(fd_, bytes.data() + done, bytes.size() - done);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) {
-        const int err = n < 0 ? errno : ENOSPC;
-        fail(path_, std::string("write failed: ") + std::strerror(err) +
-                        (err == ENOSPC ? " (free some space and run again: the run resumes from this checkpoint)" : ""));
-      }
-      done += size_t(n);
-    }
-  }
-
- private:
-  std::string path_;
-  int fd_ = -1;
-};
 
 }  // namespace
 
