@@ -3,7 +3,10 @@
 // `stratified` strategy checked against brute force on the same frames.
 #include <gtest/gtest.h>
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -180,6 +183,55 @@ TEST_F(StratifiedSystem, FarObjectsAtLevelsUnderHalfATexelShowTheSameFaces) {
   Renderer renderer(RenderSettings{});
   renderer.render(camera, std::vector<DrawItem>{}, [](const DrawItem&) -> const Mesh* { return nullptr; });
   EXPECT_GT(render_frame(*make_strategy("brute", *world_, StrategyOptions{}), renderer, camera).triangles, 0u);
+}
+
+TEST_F(StratifiedSystem, ShardsMergeAndAKilledBakeResumesIntoTheWorldOfOneRun) {
+  // Oracle: one process baking every cell along the path.
+  const test::TempDir dir;
+  const std::string options = " --alpha 10 --box 120 --resolution 32 --along-margin 40 --along " + inputs_->file("fast.path") + " --json";
+  const auto build = [&](const std::string& args) {
+    const test::CommandResult r = test::run_cellwalk("stratify build " + world_file_ + " " + args + options);
+    EXPECT_EQ(r.exit_code, 0) << args << ": " << r.output;
+    return r.exit_code == 0 ? nlohmann::json::parse(r.output) : nlohmann::json::object();
+  };
+  const nlohmann::json one = build("-o " + dir.file("one.cww"));
+  ASSERT_GT(one["baked_now"].get<int>(), 3);
+  const std::vector<uint8_t> expected = test::slurp(dir.file("one.cww"));
+  int baked = 0;
+  for (int i = 0; i < 3; ++i) baked += build("--shard " + std::to_string(i) + "/3 -o " + dir.file("p" + std::to_string(i)))["baked_now"].get<int>();
+  EXPECT_EQ(baked, one["baked_now"].get<int>());
+  build("-o " + dir.file("merged.cww") + " --merge " + dir.file("p2") + " " + dir.file("p0") + " " + dir.file("p1"));
+  EXPECT_EQ(test::slurp(dir.file("merged.cww")), expected);
+
+  // A run killed in the middle of a record: the torn record is baked again, the rest resumed.
+  const std::string checkpoint = dir.file("two.cww.stratify-checkpoint");
+  build("--shard 0/1 -o " + checkpoint);
+  std::filesystem::resize_file(checkpoint, std::filesystem::file_size(checkpoint) - 100);
+  const nlohmann::json resumed = build("-o " + dir.file("two.cww"));
+  EXPECT_EQ(resumed["baked_now"], 1);
+  EXPECT_EQ(resumed["resumed"].get<int>(), one["baked_now"].get<int>() - 1);
+  EXPECT_EQ(test::slurp(dir.file("two.cww")), expected);
+  EXPECT_FALSE(std::filesystem::exists(checkpoint));
+
+  // Parts that are not one whole run, and a checkpoint of another run, are refused in one line
+  // and nothing is written.
+  test::spit(dir.file("junk"), {'j', 'u', 'n', 'k', 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0});
+  const test::CommandResult other = test::run_cellwalk("stratify build " + world_file_ + " --shard 0/1 -o " + dir.file("other") +
+                                                       " --alpha 8 --box 120 --resolution 32");
+  ASSERT_EQ(other.exit_code, 0) << other.output;
+  std::filesystem::copy_file(dir.file("other"), dir.file("three.cww.stratify-checkpoint"));
+  for (const std::string& args : {"-o " + dir.file("bad.cww") + " --merge " + dir.file("p0") + " " + dir.file("p1"),
+                                  "-o " + dir.file("bad.cww") + " --merge " + dir.file("p0") + " " + dir.file("p0") + " " + dir.file("p1"),
+                                  "-o " + dir.file("bad.cww") + " --merge " + dir.file("junk"),
+                                  "-o " + dir.file("bad.cww") + " --merge " + dir.file("other"),
+                                  "-o " + dir.file("three.cww"), std::string("--shard 3/3"), "--shard 0/1 --merge " + dir.file("p0")}) {
+    const test::CommandResult r = test::run_cellwalk("stratify build " + world_file_ + " " + args + options);
+    EXPECT_NE(r.exit_code, 0) << args;
+    EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << args << ": " << r.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("bad.cww")));
+  EXPECT_FALSE(std::filesystem::exists(dir.file("three.cww")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("three.cww.stratify-checkpoint")));  // another run's work is kept
 }
 
 TEST_F(StratifiedSystem, FaceQuadMatchesItsCamera) {

@@ -2,6 +2,7 @@
 //   plan   viewcell and box sizing, cell counts and the multi-shell analysis (digest 002 §3.3–§3.11)
 //   build  viewcells, near lists and baked far faces, stored in the world (§3.1)
 #include <chrono>
+#include <filesystem>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -13,6 +14,7 @@
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/stratified/bake_log.hpp"
 #include "cellwalk/systems/stratified/sizing.hpp"
 #include "cellwalk/systems/stratified/stored_stratified.hpp"
 #include "checks.hpp"
@@ -193,6 +195,8 @@ struct BuildOptions {
   int resolution = 512;
   float far_level_texels = stratified::BakeSettings{}.max_texels;
   std::string screen;  // "H[:FOV]": the resolution from the screen
+  std::string shard;   // "i/N": bake shard i of N into a part file
+  std::vector<std::string> merge;  // part files to merge into the world
   bool json = false;
 };
 
@@ -235,13 +239,8 @@ double build_side(const BuildOptions& o, const World& world) {
   return viewcell_side(sizing, rad(o.alpha_deg), o.box, model);
 }
 
-void run_build(BuildOptions o) {
-  if (!o.screen.empty()) o.resolution = resolution_for_screen(o.screen);
-  const std::string out = o.out.empty() ? o.world : o.out;
-  refuse_same_files({}, {out});
-  const World world(o.world);
-  const float v = float(build_side(o, world));
-  const auto start = std::chrono::steady_clock::now();
+// The viewcells of the options: the k-d cells, their near lists, those baked (--along).
+Viewcells make_cells(const BuildOptions& o, const World& world, float v) {
   std::vector<Aabb> bounds(world.object_count());
   for (ObjectId id = 0; id < world.object_count(); ++id) bounds[id] = world.object(id).bounds;
   Viewcells cells = build_viewcells(default_cell_region(world.info().bounds, world.info().nav, true), v, float(o.box), bounds);
@@ -250,49 +249,144 @@ void run_build(BuildOptions o) {
     warn_if_other_world(path, o.along, world.info(), o.world);
     cells.partition = visibility::cells_along(*cells.partition, path, o.along_margin);
   }
-  const double cells_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  FarFieldBaker baker(world, {.resolution = o.resolution, .max_texels = o.far_level_texels});
-  std::unique_ptr<Progress> progress;
-  const StratifiedParams params{float(rad(o.alpha_deg)), v, float(o.box), o.sizing, o.resolution};
-  const StratifiedSizes sizes = write_world_with_stratified(
-      world, out, cells, params,
-      [&](CellId c) { return baker.bake(cells.partition->cell(c).box.center(), float(o.box), cells.near.near(c)); },
-      [&](uint64_t done, uint64_t total) {
-        if (!progress) progress = std::make_unique<Progress>("stratify bake", total);
-        progress->update(done);
-      });
-  if (progress) progress->finish();
-  const double per_cell_ms = sizes.baked_cells ? 1e3 * sizes.bake_seconds / sizes.baked_cells : 0.0;
+  return cells;
+}
+
+// What baking took: the cells baked now and resumed, their time and triangles.
+struct BakeWork {
+  uint64_t baked = 0, resumed = 0, triangles = 0;
+  double seconds = 0;
+};
+
+// Bakes the cells of shard `shard` of `shards` that `log` does not hold yet, appending each.
+BakeWork bake_into(BakeLog& log, const World& world, const Viewcells& cells, const BakeSettings& settings, float b,
+                   int shard, int shards) {
+  BakeWork work;
+  work.resumed = log.resumed();
+  std::vector<CellId> computed, todo;
+  for (CellId c = 0; c < cells.partition->cell_count(); ++c)
+    if (cells.partition->cell(c).computed()) computed.push_back(c);
+  // Shard i takes the i-th of N equal runs of the cells to bake (in id order), so shards of a
+  // run restricted by --along share its cells evenly.
+  const size_t from = computed.size() * size_t(shard) / size_t(shards), to = computed.size() * size_t(shard + 1) / size_t(shards);
+  for (size_t i = from; i < to; ++i)
+    if (!log.part().has(computed[i])) todo.push_back(computed[i]);
+  if (todo.empty()) return work;
+  FarFieldBaker baker(world, settings);
+  Progress progress("stratify bake", todo.size());
+  StratifiedSizes scratch;
+  const auto start = std::chrono::steady_clock::now();
+  for (const CellId c : todo) {
+    log.append(c, baker.bake(cells.partition->cell(c).box.center(), b, cells.near.near(c)), b, scratch);
+    progress.update(++work.baked);
+  }
+  progress.finish();
+  work.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  work.triangles = baker.triangles_drawn();
+  return work;
+}
+
+// The parts of one run, every shard once; a cell's far field from the part that baked it.
+std::vector<BakePart> read_parts(const std::vector<std::string>& files, uint64_t hash) {
+  std::vector<BakePart> parts;
+  std::vector<bool> seen;
+  for (const std::string& file : files) {
+    parts.emplace_back(file);
+    const BakePart& p = parts.back();
+    if (p.hash() != hash)
+      fail(file, "is a part of a different bake (world, cells, α, box, resolution or levels): give --merge the parts of "
+                 "one run, with the options their shards were given");
+    if (seen.empty()) seen.assign(size_t(p.shards()), false);
+    if (p.shards() != int(seen.size())) fail(file, "is one of " + std::to_string(p.shards()) + " shards, the others of " + std::to_string(seen.size()));
+    if (seen[size_t(p.shard())]) fail(file, "repeats shard " + std::to_string(p.shard()) + "/" + std::to_string(p.shards()));
+    seen[size_t(p.shard())] = true;
+  }
+  for (size_t i = 0; i < seen.size(); ++i)
+    if (!seen[i]) fail("stratify build --merge", "shard " + std::to_string(i) + "/" + std::to_string(seen.size()) + " is missing: bake it with --shard and merge again");
+  return parts;
+}
+
+void print_build(const BuildOptions& o, const std::string& out, float v, const Viewcells& cells, double cells_s,
+                 const StratifiedSizes& sizes, const BakeWork& work, const std::string& part) {
+  const double per_cell_ms = work.baked ? 1e3 * work.seconds / double(work.baked) : 0.0;
+  const uint64_t triangles_per_cell = work.baked ? work.triangles / work.baked : 0;
   const uint64_t stored = sizes.color_bytes + sizes.id_bytes + sizes.depth_bytes;
   if (o.json) {
-    const Json j = {{"output", out}, {"alpha_deg", o.alpha_deg}, {"v", v}, {"b", o.box}, {"sizing", o.sizing},
-                    {"resolution", o.resolution}, {"far_level_texels", o.far_level_texels}, {"cells", sizes.cells}, {"baked_cells", sizes.baked_cells},
-                    {"kd_height", cells.height}, {"peak_held_ids", cells.peak_held_ids}, {"near_ids", sizes.near_ids},
-                    {"near_bytes", sizes.near_bytes}, {"faces", sizes.faces}, {"raw_face_bytes", sizes.raw_face_bytes},
-                    {"color_bytes", sizes.color_bytes}, {"id_bytes", sizes.id_bytes}, {"depth_bytes", sizes.depth_bytes},
-                    {"cells_seconds", cells_s}, {"bake_seconds", sizes.bake_seconds}, {"bake_ms_per_cell", per_cell_ms},
-                    {"bake_triangles_per_cell", sizes.baked_cells ? baker.triangles_drawn() / sizes.baked_cells : 0}};
+    const Json j = {{"output", part.empty() ? out : part}, {"alpha_deg", o.alpha_deg}, {"v", v}, {"b", o.box}, {"sizing", o.sizing},
+                    {"resolution", o.resolution}, {"far_level_texels", o.far_level_texels}, {"shard", o.shard.empty() ? Json(nullptr) : Json(o.shard)},
+                    {"cells", cells.partition->cell_count()}, {"baked_now", work.baked}, {"resumed", work.resumed},
+                    {"baked_cells", sizes.baked_cells}, {"kd_height", cells.height}, {"peak_held_ids", cells.peak_held_ids},
+                    {"near_ids", sizes.near_ids}, {"near_bytes", sizes.near_bytes}, {"faces", sizes.faces},
+                    {"raw_face_bytes", sizes.raw_face_bytes}, {"color_bytes", sizes.color_bytes}, {"id_bytes", sizes.id_bytes},
+                    {"depth_bytes", sizes.depth_bytes}, {"cells_seconds", cells_s}, {"bake_seconds", work.seconds},
+                    {"bake_ms_per_cell", per_cell_ms}, {"bake_triangles_per_cell", triangles_per_cell}};
     print_json("stratify build", j);
     return;
   }
-  std::printf("stratify build: α = %g°, v = %.2f m (%s), b = %g m: %llu cells (k-d height %u), %llu baked, %llu faces\n",
-              o.alpha_deg, v, o.sizing.c_str(), o.box, (unsigned long long)sizes.cells, cells.height,
-              (unsigned long long)sizes.baked_cells, (unsigned long long)sizes.faces);
+  std::printf("stratify build: α = %g°, v = %.2f m (%s), b = %g m: %llu cells (k-d height %u); baked %llu now (%.0f ms and %llu triangles a cell), %llu resumed\n",
+              o.alpha_deg, v, o.sizing.c_str(), o.box, (unsigned long long)cells.partition->cell_count(), cells.height,
+              (unsigned long long)work.baked, per_cell_ms, (unsigned long long)triangles_per_cell, (unsigned long long)work.resumed);
+  if (!part.empty()) {
+    std::printf("  wrote shard %s to %s: merge every shard with --merge\n", o.shard.c_str(), part.c_str());
+    return;
+  }
   std::printf("  near lists: %.1f objects a cell on average, %llu bytes; built in %.2f s (peak %llu ids held)\n",
               sizes.cells ? double(sizes.near_ids) / sizes.cells : 0.0, (unsigned long long)sizes.near_bytes, cells_s,
               (unsigned long long)cells.peak_held_ids);
-  std::printf("  far faces %d²: %.1f MiB stored (colour %.1f, ids %.1f, depth %.1f) of %.1f MiB raw; %.0f ms and %llu triangles a cell\n",
-              o.resolution, stored / 1048576.0, sizes.color_bytes / 1048576.0, sizes.id_bytes / 1048576.0,
-              sizes.depth_bytes / 1048576.0, sizes.raw_face_bytes / 1048576.0, per_cell_ms,
-              (unsigned long long)(sizes.baked_cells ? baker.triangles_drawn() / sizes.baked_cells : 0));
+  std::printf("  far faces %d²: %llu cells, %llu faces, %.1f MiB stored (colour %.1f, ids %.1f, depth %.1f) of %.1f MiB raw\n",
+              o.resolution, (unsigned long long)sizes.baked_cells, (unsigned long long)sizes.faces, stored / 1048576.0,
+              sizes.color_bytes / 1048576.0, sizes.id_bytes / 1048576.0, sizes.depth_bytes / 1048576.0,
+              sizes.raw_face_bytes / 1048576.0);
   std::printf("  wrote %s\n", out.c_str());
+}
+
+// Bakes into a checkpoint (resumed when one of this run is there), or shard i of N into a part
+// file, or merges the parts; then, but for a shard, writes the world with the far faces read
+// back from the checkpoint or the parts, and removes the checkpoint.
+void run_build(BuildOptions o) {
+  if (!o.screen.empty()) o.resolution = resolution_for_screen(o.screen);
+  int shard = 0, shards = 1;
+  if (!o.shard.empty()) visibility::parse_shard(o.shard, shard, shards);
+  const std::string out = o.out.empty() ? o.world : o.out;
+  const std::string part = o.shard.empty() ? "" : o.out.empty() ? o.world + ".stratify-part-" + std::to_string(shard) + "-of-" + std::to_string(shards) : o.out;
+  refuse_same_files(o.merge, {part.empty() ? out : part});
+  const World world(o.world);
+  const float v = float(build_side(o, world));
+  const auto start = std::chrono::steady_clock::now();
+  const Viewcells cells = make_cells(o, world, v);
+  const double cells_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const StratifiedParams params{float(rad(o.alpha_deg)), v, float(o.box), o.sizing, o.resolution};
+  const BakeSettings settings{.resolution = o.resolution, .max_texels = o.far_level_texels};
+  const uint64_t hash = bake_run_hash(world, cells, params, settings);
+  BakeWork work;
+  std::vector<BakePart> parts;
+  std::optional<BakeLog> log;
+  if (o.merge.empty()) {
+    log.emplace(part.empty() ? out + ".stratify-checkpoint" : part, hash, shard, shards);
+    work = bake_into(*log, world, cells, settings, float(o.box), shard, shards);
+    if (!part.empty()) return print_build(o, out, v, cells, cells_s, {}, work, part);
+    parts.push_back(log->part());
+  } else {
+    parts = read_parts(o.merge, hash);
+  }
+  const StratifiedSizes sizes = write_world_with_stratified(world, out, cells, params, [&](CellId c) {
+    for (const BakePart& p : parts)
+      if (p.has(c)) return p.far_field(c, float(o.box), o.resolution, world.object_count());
+    fail("stratify build --merge", "cell " + std::to_string(c) + " is in no part: the parts are of a shorter run; bake again");
+  });
+  if (log) {
+    const std::string checkpoint = log->part().path();
+    log.reset();
+    std::filesystem::remove(checkpoint);
+  }
+  print_build(o, out, v, cells, cells_s, sizes, work, "");
 }
 
 void register_stratify_build(CLI::App& stratify) {
   auto* cmd = stratify.add_subcommand("build", "Make the viewcells, near lists and far faces of a world (stored in it)");
   auto o = std::make_shared<BuildOptions>();
   cmd->add_option("world", o->world, "World file (.cww)")->required()->check(CLI::ExistingFile);
-  cmd->add_option("-o,--out", o->out, "Output world file (default: rewrite the input in place, atomically)");
+  cmd->add_option("-o,--out", o->out, "Output world file (default: rewrite the input in place, atomically); with --shard, the part file");
   cmd->add_option("--alpha", o->alpha_deg, "Largest angular error of the far field, degrees")
       ->check(number_in(0, 89, true))->capture_default_str();
   cmd->add_option("--box", o->box, "Bounding box side b, metres")->check(number_in(0, 1e7, true))->capture_default_str();
@@ -310,6 +404,10 @@ void register_stratify_build(CLI::App& stratify) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--along-margin", o->along_margin, "--along: metres around the path whose cells are baked")
       ->check(number_in(0, 1e6))->capture_default_str()->needs(along);
+  auto* shard = cmd->add_option("--shard", o->shard, "Bake only shard i of N (equal runs of the cells to bake) into a part file (i/N; -o names it); a killed run resumes");
+  auto* merge = cmd->add_option("--merge", o->merge, "Merge the part files of every shard into the world (give the shards' options)")
+      ->expected(1, -1)->check(CLI::ExistingFile);
+  shard->excludes(merge);
   cmd->add_flag("--json", o->json, "Machine-readable output");
   cmd->callback([o] { run_build(*o); });
 }

@@ -37,18 +37,6 @@ float parse_float(const std::string& spec, const std::string& text) {
   fail("cells spec '" + spec + "'", "'" + text + "' is not a finite positive number");
 }
 
-// "i/N" exactly: two whole numbers, 0 <= i < N, nothing before or after.
-void parse_shard(const std::string& text, int& shard, int& shards) {
-  const size_t slash = text.find('/');
-  const auto whole = [&](size_t from, size_t to, int& out) {
-    const auto [stop, error] = std::from_chars(text.data() + from, text.data() + to, out);
-    return from < to && error == std::errc() && stop == text.data() + to;
-  };
-  if (slash == std::string::npos || !whole(0, slash, shard) || !whole(slash + 1, text.size(), shards) ||
-      shards < 1 || shard < 0 || shard >= shards)
-    fail("--shard '" + text + "'", "expected i/N with 0 <= i < N, e.g. 0/4");
-}
-
 std::vector<std::string> split_colons(const std::string& s) {
   std::vector<std::string> parts;
   size_t start = 0;
@@ -191,6 +179,19 @@ ParsedPart resumable_part(const std::string& checkpoint, uint64_t hash, uint64_t
 }
 
 }  // namespace
+
+// "i/N" exactly: two whole numbers, 0 <= i < N, nothing before or after.
+void parse_shard(const std::string& text, int& shard, int& shards) {
+  const size_t slash = text.find('/');
+  const auto whole = [&](size_t from, size_t to, int& out) {
+    const auto [stop, error] = std::from_chars(text.data() + from, text.data() + to, out);
+    return from < to && error == std::errc() && stop == text.data() + to;
+  };
+  if (slash == std::string::npos || !whole(0, slash, shard) || !whole(slash + 1, text.size(), shards) ||
+      shards < 1 || shard < 0 || shard >= shards)
+    fail("--shard '" + text + "'", "expected i/N with 0 <= i < N, e.g. 0/4");
+}
+
 
 CellSetSize drawn_triangles(const VisibilityEngine& engine, const World& world, const CellLodRule& rule) {
   return [&engine, &world, rule](const Aabb& box) {

@@ -39,6 +39,10 @@ std::unique_ptr<ViewCellPartition> cells_along(const ViewCellPartition& partitio
 PvsRun make_pvs_run(const VisibilityEngine& engine, const std::string& cells_spec, const EngineOptions& options,
                     const std::string& shard = "", int threads = 0);
 
+// "i/N" exactly: two whole numbers, 0 <= i < N, nothing before or after. Throws Error naming
+// --shard otherwise.
+void parse_shard(const std::string& text, int& shard, int& shards);
+
 // The cells to compute (neither solid nor skipped) of shard `shard` of `shards`: ids in [shard·C/shards, (shard+1)·C/shards).
 std::vector<CellId> shard_cells(const ViewCellPartition& partition, int shard, int shards);
 
