@@ -18,7 +18,9 @@
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/stratified/stored_stratified.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
+#include "edits.hpp"
 #include "experiments/common/bench_world.hpp"
+#include "far_field_pattern.hpp"
 
 namespace {
 
@@ -26,25 +28,6 @@ using namespace cellwalk;
 using namespace cellwalk::stratified;
 
 constexpr int kResolution = 8;
-
-// A face showing the far objects' ids in turn, at depths beyond the box.
-CellFarField pattern_field(CellId c, uint64_t objects, float b) {
-  CellFarField field;
-  for (int face = 0; face < 4; face += 1 + int(c % 2)) {
-    FaceImage f;
-    f.face = face;
-    f.color = {kResolution, kResolution, std::vector<uint8_t>(kResolution * kResolution * 4, 0)};
-    f.ids = {kResolution, kResolution, std::vector<uint32_t>(kResolution * kResolution, 0)};
-    f.depth.assign(kResolution * kResolution, 0.0f);
-    for (size_t t = 0; t < f.depth.size(); t += 3) {
-      f.ids.ids[t] = uint32_t(1 + (t + c) % objects);
-      f.color.rgba[t * 4 + 3] = 255;
-      f.depth[t] = b * (0.5f + 0.1f * float(t % 7));
-    }
-    field.faces.push_back(std::move(f));
-  }
-  return field;
-}
 
 struct Base {
   std::string dir = "/tmp/cellwalk-fuzz-stratified-" + std::to_string(getpid());
@@ -61,7 +44,7 @@ struct Base {
     const float b = 40.0f;
     const Viewcells cells = build_viewcells(default_cell_region(plain.info().bounds, plain.info().nav, true), 12.0f, b, bounds);
     write_world_with_stratified(plain, stratified_file, cells, {0.1f, 12.0f, b, "eq22", kResolution},
-                                [&](CellId c) { return pattern_field(c, plain.object_count(), b); });
+                                [&](CellId c) { return fuzz::far_field_pattern(c, plain.object_count(), b, kResolution); });
     world = std::make_unique<World>(stratified_file);
     sections[0] = world->file().read_all(kStratifiedSection);
     sections[1] = world->file().read_all(kFarFieldSection);
@@ -72,15 +55,6 @@ struct Base {
   }
 };
 
-std::vector<uint8_t> edited(const std::vector<uint8_t>& section, const uint8_t* data, size_t size) {
-  if (data[0] < 2) return {data + 1, data + size};
-  std::vector<uint8_t> out = section;
-  if (size >= 3) out.resize((data[1] | size_t(data[2]) << 8) % (section.size() + 1));
-  for (size_t i = 3; i + 2 < size && !out.empty(); i += 3)
-    out[(data[i] | size_t(data[i + 1]) << 8) % out.size()] ^= data[i + 2];
-  return out;
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -89,7 +63,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const std::string path = base.dir + "/input.cww";
   const int which = data[0] & 1;
   const char* name = which == 0 ? kStratifiedSection : kFarFieldSection;
-  visibility::write_world_sections(*base.world, path, {{name, edited(base.sections[which], data, size), {}}});
+  visibility::write_world_sections(*base.world, path, {{name, fuzz::edited(base.sections[which], data, size, data[0] < 2), {}}});
   try {
     const World world(path);
     const StoredStratified stored(world);

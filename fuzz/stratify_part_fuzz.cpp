@@ -14,6 +14,8 @@
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/systems/stratified/bake_log.hpp"
+#include "edits.hpp"
+#include "far_field_pattern.hpp"
 #include "store/checkpoint_file.hpp"
 
 namespace {
@@ -25,25 +27,6 @@ constexpr int kResolution = 8;
 constexpr uint64_t kObjects = 50;
 constexpr float kBox = 40.0f;
 
-// A cell's far field: faces showing object ids in turn, at depths beyond the box.
-CellFarField pattern_field(CellId c) {
-  CellFarField field;
-  for (int face = 0; face < 4; face += 1 + int(c % 2)) {
-    FaceImage f;
-    f.face = face;
-    f.color = {kResolution, kResolution, std::vector<uint8_t>(kResolution * kResolution * 4, 0)};
-    f.ids = {kResolution, kResolution, std::vector<uint32_t>(kResolution * kResolution, 0)};
-    f.depth.assign(kResolution * kResolution, 0.0f);
-    for (size_t t = 0; t < f.depth.size(); t += 3) {
-      f.ids.ids[t] = uint32_t(1 + (t + c) % kObjects);
-      f.color.rgba[t * 4 + 3] = 255;
-      f.depth[t] = kBox * (0.5f + 0.1f * float(t % 7));
-    }
-    field.faces.push_back(std::move(f));
-  }
-  return field;
-}
-
 struct Base {
   std::string dir = "/tmp/cellwalk-fuzz-stratify-part-" + std::to_string(getpid());
   std::vector<uint8_t> part;
@@ -54,7 +37,7 @@ struct Base {
     {
       BakeLog log(path, 0x1234, 1, 3);
       StratifiedSizes sizes;
-      for (const CellId c : {3u, 4u, 9u}) log.append(c, pattern_field(c), kBox, sizes);
+      for (const CellId c : {3u, 4u, 9u}) log.append(c, fuzz::far_field_pattern(c, kObjects, kBox, kResolution), kBox, sizes);
     }
     part = read_checkpoint_file(path);
   }
@@ -64,22 +47,13 @@ struct Base {
   }
 };
 
-std::vector<uint8_t> edited(const std::vector<uint8_t>& base, const uint8_t* data, size_t size) {
-  if (data[0] == 0) return {data + 1, data + size};
-  std::vector<uint8_t> out = base;
-  if (size >= 3) out.resize((data[1] | size_t(data[2]) << 8) % (base.size() + 1));
-  for (size_t i = 3; i + 2 < size && !out.empty(); i += 3)
-    out[(data[i] | size_t(data[i + 1]) << 8) % out.size()] ^= data[i + 2];
-  return out;
-}
-
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const Base base;
   if (size == 0) return 0;
   static const std::string path = base.dir + "/input.part";
-  const std::vector<uint8_t> bytes = edited(base.part, data, size);
+  const std::vector<uint8_t> bytes = fuzz::edited(base.part, data, size, data[0] == 0);
   FILE* f = std::fopen(path.c_str(), "wb");
   if (!bytes.empty()) std::fwrite(bytes.data(), 1, bytes.size(), f);
   std::fclose(f);

@@ -16,6 +16,7 @@
 #include "cellwalk/precompute/engine.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/visibility/stored_vlod.hpp"
+#include "edits.hpp"
 #include "experiments/common/bench_world.hpp"
 #include "precompute/embree_scene.hpp"
 #include "precompute/pvs_builder.hpp"
@@ -52,15 +53,6 @@ struct Base {
   }
 };
 
-std::vector<uint8_t> edited(const std::vector<uint8_t>& section, const uint8_t* data, size_t size) {
-  if (data[0] == 0) return {data + 1, data + size};
-  std::vector<uint8_t> out = section;
-  if (size >= 3) out.resize((data[1] | size_t(data[2]) << 8) % (section.size() + 1));
-  for (size_t i = 3; i + 2 < size && !out.empty(); i += 3)
-    out[(data[i] | size_t(data[i + 1]) << 8) % out.size()] ^= data[i + 2];
-  return out;
-}
-
 void check(const std::vector<uint32_t>& ids, uint64_t pieces) {
   for (uint32_t id : ids)
     if (id >= pieces) std::abort();
@@ -72,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const Base base;
   if (size == 0) return 0;
   static const std::string path = base.dir + "/input.cww";
-  visibility::write_world_sections(*base.world, path, {{visibility::kVlodSection, edited(base.section, data, size), {}}});
+  visibility::write_world_sections(*base.world, path, {{visibility::kVlodSection, fuzz::edited(base.section, data, size, data[0] == 0), {}}});
   try {
     const World world(path);
     const visibility::StoredVlod stored(world);
