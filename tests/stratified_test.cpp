@@ -73,6 +73,22 @@ TEST_F(StratifiedSystem, StoredNearListsAreTheObjectsMeetingEachBox) {
   }
 }
 
+// Whether the segment from `from` along unit `dir` for `length` metres meets `box` (slab test).
+bool segment_meets(const Vec3& from, const Vec3& dir, float length, const Aabb& box) {
+  float lo = 0.0f, hi = length;
+  for (int a = 0; a < 3; ++a) {
+    if (std::abs(dir[a]) < 1e-12f) {
+      if (from[a] < box.min[a] || from[a] > box.max[a]) return false;
+      continue;
+    }
+    float t0 = (box.min[a] - from[a]) / dir[a], t1 = (box.max[a] - from[a]) / dir[a];
+    if (t0 > t1) std::swap(t0, t1);
+    lo = std::max(lo, t0);
+    hi = std::min(hi, t1);
+  }
+  return lo <= hi;
+}
+
 TEST_F(StratifiedSystem, FarFacesShowOnlyFarObjectsAtTheirTrueDistance) {
   const StoredStratified stored(*world_);
   size_t faces = 0;
@@ -97,12 +113,17 @@ TEST_F(StratifiedSystem, FarFacesShowOnlyFarObjectsAtTheirTrueDistance) {
         const Camera cam = face_camera(centre, kBox, f.face, 1e4f);
         const float x = (2.0f * i + 1) / kResolution - 1, y = (2.0f * j + 1) / kResolution - 1;
         const Vec3 dir = glm::normalize(cam.forward() + x * cam.right() + y * cam.up());
-        const Vec3 p = centre + dir * f.depth[t];
-        EXPECT_GE(f.depth[t], 0.5f * kBox * 0.999f);
+        // The stored depth is the farthest of its disparity step (docs/format.md): the true
+        // point lies on the ray between the step's nearest and farthest distance.
+        const float far = f.depth[t];
+        EXPECT_GE(far, 0.5f * kBox * 0.999f);
+        const double step = std::isinf(far) ? 0.0 : std::round(254.0 * 0.5 * kBox / far);
+        const float near_end = float(0.5 * kBox * 254.0 / (step + 1.0));
         Aabb grown = world_->object(id - 1).bounds;
-        grown.min -= Vec3(0.02f * f.depth[t]);
-        grown.max += Vec3(0.02f * f.depth[t]);
-        EXPECT_TRUE(grown.contains(p)) << "texel " << t << " of cell " << c << " face " << f.face;
+        grown.min -= Vec3(0.02f * near_end);
+        grown.max += Vec3(0.02f * near_end);
+        EXPECT_TRUE(segment_meets(centre + dir * near_end, dir, std::isinf(far) ? 1e30f : far - near_end, grown))
+            << "texel " << t << " of cell " << c << " face " << f.face << " at " << near_end << "-" << far << " m";
       }
     }
   }
@@ -131,7 +152,7 @@ TEST_F(StratifiedSystem, MeasuredFarAngleIsZeroAtTheCentreAndWithinTheCheckersBo
       camera.position = cell.box.min + Vec3(0.0f, 0.25f, 0.0f);  // a corner, at eye height
       const double corner = far_field_angle(field, cell.box.center(), kBox, camera);
       largest = std::max(largest, corner);
-      // The 16-bit depth and the texel's centre add a little: half a texel of 90°/64.
+      // The stored depth and the texel's centre add a little: half a texel of 90°/64.
       EXPECT_LE(corner, bound + 0.5 * (M_PI / 2) / kResolution) << "cell " << c << " yaw " << yaw;
     }
   }
@@ -183,6 +204,38 @@ TEST_F(StratifiedSystem, FarObjectsAtLevelsUnderHalfATexelShowTheSameFaces) {
   Renderer renderer(RenderSettings{});
   renderer.render(camera, std::vector<DrawItem>{}, [](const DrawItem&) -> const Mesh* { return nullptr; });
   EXPECT_GT(render_frame(*make_strategy("brute", *world_, StrategyOptions{}), renderer, camera).triangles, 0u);
+}
+
+TEST_F(StratifiedSystem, StoredDepthBoundsTheAngleFromAboveAndCloselyFromTheBakesExactDepth) {
+  // Oracle: the baker's float depths. The 8-bit disparity a world stores measures the far-field
+  // angle from any eye at least as large as they do, and larger by at most a few tenths of α.
+  const StoredStratified stored(*world_);
+  uint64_t triangles = 0;
+  const auto exact = bake_cells(*world_, stored, {.resolution = kResolution}, triangles);
+  const double alpha = stored.params().alpha;
+  double largest_excess = 0.0, largest = 0.0;
+  size_t i = 0;
+  for (CellId c = 0; c < stored.partition().cell_count(); c += 9, ++i) {
+    StratifiedSizes sizes;
+    const std::vector<uint8_t> record = encode_far_field(exact[i], kBox, sizes);
+    const CellFarField stored_field = decode_far_field(record, kBox, kResolution, world_->object_count(), "test");
+    const ViewCell& cell = stored.partition().cell(c);
+    Camera camera;
+    camera.fov_y_deg = 100.0f;
+    camera.aspect = 1.0f;
+    for (const Vec3 eye : {cell.box.min, cell.box.max, Vec3(cell.box.min.x, cell.box.max.y, cell.box.max.z)})
+      for (const float yaw : {0.0f, 90.0f, 180.0f, 270.0f}) {
+        camera.yaw_deg = yaw;
+        camera.position = eye;
+        const double truth = far_field_angle(exact[i], cell.box.center(), kBox, camera);
+        const double measured = far_field_angle(stored_field, cell.box.center(), kBox, camera);
+        EXPECT_GE(measured, truth - 1e-6) << "cell " << c << " yaw " << yaw;
+        largest_excess = std::max(largest_excess, measured - truth);
+        largest = std::max(largest, truth);
+      }
+  }
+  EXPECT_GT(largest, 0.2 * alpha);
+  EXPECT_LE(largest_excess, 0.02 * alpha);
 }
 
 TEST_F(StratifiedSystem, ShardsMergeAndAKilledBakeResumesIntoTheWorldOfOneRun) {

@@ -63,11 +63,13 @@ double far_field_angle(const CellFarField& field, const Vec3& c, float b, const 
         const float x = (2.0f * i + 1.0f) / res - 1.0f, y = (2.0f * j + 1.0f) / res - 1.0f;
         const Vec3 ray = fwd + x * right + y * up;  // reaches the face at t = b/2
         const Vec3 q = c + 0.5f * b * ray;
-        const Vec3 p = c + glm::normalize(ray) * depth;
         Aabb point;
         point.extend(q);
         if (!frustum.intersects(point)) continue;
-        const glm::dvec3 to_q = glm::dvec3(q) - eye, to_p = glm::dvec3(p) - eye;
+        const glm::dvec3 to_q = glm::dvec3(q) - eye;
+        // At infinite depth the far point is seen along the ray itself, from any eye.
+        const glm::dvec3 to_p = std::isinf(depth) ? glm::normalize(glm::dvec3(ray))
+                                                  : glm::dvec3(c) + glm::normalize(glm::dvec3(ray)) * double(depth) - eye;
         worst = std::max(worst, std::atan2(glm::length(glm::cross(to_q, to_p)), glm::dot(to_q, to_p)));
       }
   }

@@ -8,6 +8,7 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/visibility/id_codec.hpp"
@@ -17,7 +18,7 @@
 namespace cellwalk::stratified {
 namespace {
 
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 2;  // 2: depth as 8-bit disparity
 constexpr int kZstdLevel = 6;
 
 std::vector<uint8_t> compress(std::span<const uint8_t> raw) {
@@ -49,42 +50,39 @@ std::span<uint8_t> as_writable_bytes(std::vector<T>& v) {
   return {reinterpret_cast<uint8_t*>(v.data()), v.size() * sizeof(T)};
 }
 
-// Depth as 16 bits: q = round(65535·(b/2)/d), d >= b/2 for far texels; 0 = nothing there.
-std::vector<uint16_t> quantise_depth(const std::vector<float>& depth, float b) {
-  std::vector<uint16_t> q(depth.size(), 0);
+// Depth as 8 bits of disparity s = (b/2)/d (s <= 1 for far texels, which lie outside the box):
+// q = 1 + floor(254·s), clamped to [1, 255]; 0 = nothing there. Decoding gives the farthest
+// distance the byte allows, (b/2)·254/(q − 1), infinite for q = 1. Why disparity: the far
+// field's angular error grows like 1/(face distance) − 1/d, so equal steps of s are equal steps
+// of error, and 254 of them measure an angle of α to within about α/254. Why the farthest: the
+// error seen from any eye grows with d beyond the face, so the measured angle is an upper bound.
+std::vector<uint8_t> quantise_depth(const std::vector<float>& depth, float b) {
+  std::vector<uint8_t> q(depth.size(), 0);
   for (size_t i = 0; i < depth.size(); ++i)
-    if (depth[i] > 0) q[i] = uint16_t(std::clamp(std::lround(65535.0 * 0.5 * b / depth[i]), 1l, 65535l));
+    if (depth[i] > 0) q[i] = uint8_t(1 + std::min(254.0, std::floor(254.0 * 0.5 * b / depth[i])));
   return q;
 }
 
-std::vector<float> dequantise_depth(const std::vector<uint16_t>& q, float b) {
+std::vector<float> dequantise_depth(const std::vector<uint8_t>& q, float b) {
   std::vector<float> depth(q.size(), 0.0f);
   for (size_t i = 0; i < q.size(); ++i)
-    if (q[i] > 0) depth[i] = float(65535.0 * 0.5 * b / q[i]);
+    if (q[i] == 1) depth[i] = std::numeric_limits<float>::infinity();
+    else if (q[i] > 1) depth[i] = float(0.5 * b * 254.0 / (q[i] - 1));
   return depth;
 }
 
-// The quantised depth as zstd sees it: each texel's difference from its left neighbour (mod 2^16;
-// surfaces are smooth, so differences are small), low bytes then high bytes. About 4× smaller
-// after zstd than the plain texels.
-std::vector<uint8_t> depth_planes(const std::vector<uint16_t>& q, int resolution) {
-  std::vector<uint8_t> planes(q.size() * 2);
-  for (size_t i = 0; i < q.size(); ++i) {
-    const uint16_t left = i % resolution ? q[i - 1] : 0;
-    const uint16_t d = uint16_t(q[i] - left);
-    planes[i] = uint8_t(d);
-    planes[q.size() + i] = uint8_t(d >> 8);
-  }
-  return planes;
+// The quantised depth as zstd sees it: each texel's difference from its left neighbour (mod 256;
+// surfaces are smooth, so differences are mostly 0 or ±1).
+std::vector<uint8_t> depth_deltas(const std::vector<uint8_t>& q, int resolution) {
+  std::vector<uint8_t> d(q.size());
+  for (size_t i = 0; i < q.size(); ++i) d[i] = uint8_t(q[i] - (i % resolution ? q[i - 1] : 0));
+  return d;
 }
 
-std::vector<uint16_t> depth_from_planes(const std::vector<uint8_t>& planes, int resolution) {
-  std::vector<uint16_t> q(planes.size() / 2);
-  for (size_t i = 0; i < q.size(); ++i) {
-    const uint16_t left = i % resolution ? q[i - 1] : 0;
-    q[i] = uint16_t(left + (planes[i] | planes[q.size() + i] << 8));
-  }
-  return q;
+std::vector<uint8_t> depth_from_deltas(std::vector<uint8_t> d, int resolution) {
+  for (size_t i = 0; i < d.size(); ++i)
+    if (i % resolution) d[i] = uint8_t(d[i] + d[i - 1]);
+  return d;
 }
 
 }  // namespace
@@ -97,7 +95,7 @@ std::vector<uint8_t> encode_far_field(const CellFarField& field, float b, Strati
   for (const FaceImage& f : field.faces) {
     const std::vector<uint8_t> color = compress(f.color.rgba);
     const std::vector<uint8_t> ids = compress(as_bytes(f.ids.ids));
-    const std::vector<uint8_t> depth = compress(depth_planes(quantise_depth(f.depth, b), f.color.width));
+    const std::vector<uint8_t> depth = compress(depth_deltas(quantise_depth(f.depth, b), f.color.width));
     w.put(uint32_t(color.size()));
     w.put(uint32_t(ids.size()));
     w.put(uint32_t(depth.size()));
@@ -105,7 +103,7 @@ std::vector<uint8_t> encode_far_field(const CellFarField& field, float b, Strati
     w.put_array<uint8_t>(ids);
     w.put_array<uint8_t>(depth);
     sizes.faces += 1;
-    sizes.raw_face_bytes += uint64_t(f.color.width) * f.color.height * (4 + 4 + 2);
+    sizes.raw_face_bytes += uint64_t(f.color.width) * f.color.height * (4 + 4 + 1);
     sizes.color_bytes += color.size();
     sizes.id_bytes += ids.size();
     sizes.depth_bytes += depth.size();
@@ -130,18 +128,18 @@ CellFarField decode_far_field(std::span<const uint8_t> bytes, float b, int resol
     // Sizes first: a hostile record must not make the decoder allocate what the frames do not hold.
     check_frame_size(color, texels * 4, r, "colour");
     check_frame_size(ids, texels * 4, r, "ids");
-    check_frame_size(depth_frame, texels * 2, r, "depth");
+    check_frame_size(depth_frame, texels, r, "depth");
     FaceImage f;
     f.face = face;
     f.color = {resolution, resolution, std::vector<uint8_t>(texels * 4)};
     f.ids = {resolution, resolution, std::vector<uint32_t>(texels)};
-    std::vector<uint8_t> depth(texels * 2);
+    std::vector<uint8_t> depth(texels);
     decompress(color, f.color.rgba, r, "colour");
     decompress(ids, as_writable_bytes(f.ids.ids), r, "ids");
     decompress(depth_frame, depth, r, "depth");
     for (const uint32_t id : f.ids.ids)
       if (id > object_count) r.error("a texel names object " + std::to_string(id - 1) + ", past the world's objects");
-    f.depth = dequantise_depth(depth_from_planes(depth, resolution), b);
+    f.depth = dequantise_depth(depth_from_deltas(std::move(depth), resolution), b);
     field.faces.push_back(std::move(f));
   }
   if (r.remaining() != 0) r.error("bytes after the last face");
