@@ -44,7 +44,10 @@ struct Base {
     const float b = 40.0f;
     const Viewcells cells = build_viewcells(default_cell_region(plain.info().bounds, plain.info().nav, true), 12.0f, b, bounds);
     write_world_with_stratified(plain, stratified_file, cells, {0.1f, 12.0f, b, "eq22", kResolution},
-                                [&](CellId c) { return fuzz::far_field_pattern(c, plain.object_count(), b, kResolution); });
+                                [&](CellId c) {
+                                  StratifiedSizes unused;
+                                  return encode_far_field(fuzz::far_field_pattern(c, plain.object_count(), b, kResolution), b, unused);
+                                });
     world = std::make_unique<World>(stratified_file);
     sections[0] = world->file().read_all(kStratifiedSection);
     sections[1] = world->file().read_all(kFarFieldSection);

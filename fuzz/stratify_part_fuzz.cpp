@@ -37,7 +37,7 @@ struct Base {
     {
       BakeLog log(path, 0x1234, 1, 3);
       StratifiedSizes sizes;
-      for (const CellId c : {3u, 4u, 9u}) log.append(c, fuzz::far_field_pattern(c, kObjects, kBox, kResolution), kBox, sizes);
+      for (const CellId c : {3u, 4u, 9u}) log.append(c, encode_far_field(fuzz::far_field_pattern(c, kObjects, kBox, kResolution), kBox, sizes));
     }
     part = read_checkpoint_file(path);
   }

@@ -17,6 +17,7 @@
 #include "cellwalk/runtime/strategies.hpp"
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/stratified/bake_pool.hpp"
 #include "cellwalk/systems/stratified/far_field.hpp"
 #include "cellwalk/systems/stratified/sizing.hpp"
 #include "cellwalk/systems/stratified/stored_stratified.hpp"
@@ -238,6 +239,38 @@ TEST_F(StratifiedSystem, StoredDepthBoundsTheAngleFromAboveAndCloselyFromTheBake
   EXPECT_LE(largest_excess, 0.02 * alpha);
 }
 
+TEST_F(StratifiedSystem, APoolOfBakersGivesTheRecordsOfOneBakerInOrder) {
+  // Oracle: one baker on this thread, each cell encoded as it is baked.
+  const StoredStratified stored(*world_);
+  const BakeSettings settings{.resolution = kResolution};
+  std::vector<std::vector<ObjectId>> near_lists;  // the jobs' spans point into these
+  for (CellId c = 0; c < stored.partition().cell_count(); c += 11) near_lists.push_back(stored.near(c));
+  std::vector<BakeJob> jobs;
+  std::vector<std::vector<uint8_t>> expected;
+  {
+    FarFieldBaker baker(*world_, settings);
+    for (size_t i = 0; i < near_lists.size(); ++i) {
+      const std::span<const ObjectId> near = near_lists[i];
+      jobs.push_back({stored.partition().cell(CellId(11 * i)).box.center(), kBox, near});
+      StratifiedSizes unused;
+      expected.push_back(encode_far_field(baker.bake(jobs.back().centre, kBox, near), kBox, unused));
+    }
+  }
+  ASSERT_GT(jobs.size(), 4u);
+  for (const int threads : {1, 3}) {
+    BakePool pool(*world_, settings, threads, jobs);
+    for (size_t i = 0; i < jobs.size(); ++i) EXPECT_EQ(pool.next(), expected[i]) << threads << " threads, job " << i;
+    EXPECT_GT(pool.triangles_drawn(), 0u);
+    EXPECT_THROW(pool.next(), Error);  // no job left
+  }
+  // A worker's error reaches the caller; a pool left with jobs undone stops when destroyed.
+  BakePool bad(*world_, {.resolution = 0}, 2, jobs);
+  EXPECT_THROW(bad.next(), Error);
+  BakePool abandoned(*world_, settings, 2, jobs);
+  EXPECT_FALSE(abandoned.next().empty());
+  EXPECT_THROW(BakePool(*world_, settings, 0, jobs), Error);
+}
+
 TEST_F(StratifiedSystem, ShardsMergeAndAKilledBakeResumesIntoTheWorldOfOneRun) {
   // Oracle: one process baking every cell along the path.
   const test::TempDir dir;
@@ -362,15 +395,17 @@ TEST_F(StratifiedSystem, BudgetHoldsTheFacesOrTheRunIsRefused) {
   const uint64_t budget = 8ull << 20;
   StrategyOptions options;
   options.memory_budget_bytes = budget;
-  const std::unique_ptr<Strategy> s = make_strategy("stratified", *world_, options);
   Camera camera;
-  for (const PathFrame& f : path.frames) {
-    apply(f, camera);
-    render_frame(*s, renderer, camera, f.time);
-    EXPECT_LE(s->resident_bytes(), budget);
+  for (const char* name : {"stratified", "stratified:fade=4"}) {  // a fading cell is charged too
+    const std::unique_ptr<Strategy> s = make_strategy(name, *world_, options);
+    for (const PathFrame& f : path.frames) {
+      apply(f, camera);
+      render_frame(*s, renderer, camera, f.time);
+      EXPECT_LE(s->resident_bytes(), budget) << name;
+    }
+    EXPECT_LE(s->peak_resident_bytes(), budget) << name;
+    EXPECT_GT(s->peak_resident_bytes(), uint64_t(kResolution) * kResolution * 12) << name;  // a face was held
   }
-  EXPECT_LE(s->peak_resident_bytes(), budget);
-  EXPECT_GT(s->peak_resident_bytes(), uint64_t(kResolution) * kResolution * 12);  // a face was held
   options.memory_budget_bytes = 64 << 10;
   EXPECT_THROW(
       {
@@ -409,6 +444,83 @@ TEST_F(StratifiedSystem, PrefetchHasTheNextCellReadyAtTheCrossing) {
   for (size_t i = 0; i < images[0].size(); ++i) EXPECT_EQ(images[0][i].rgba, images[1][i].rgba) << "frame " << i;
 }
 
+// The faces of `faces` whose opacity is below 1 (`fading`) or not, all at opacity `opacity`.
+std::vector<FarFace> faces_where(std::span<const FarFace> faces, bool fading, float opacity) {
+  std::vector<FarFace> out;
+  for (FarFace f : faces)
+    if ((f.opacity < 1.0f) == fading) {
+      f.opacity = opacity;
+      out.push_back(f);
+    }
+  return out;
+}
+
+TEST_F(StratifiedSystem, CrossFadeBlendsTheCellLeftOverTheNewOneForItsFramesAndKeepsTheNewIds) {
+  RenderSettings settings;
+  settings.width = settings.height = 64;
+  Renderer renderer(settings);
+  const CameraPath path = city_path();
+  constexpr int kFade = 3;
+  const std::unique_ptr<Strategy> hard = make_strategy("stratified", *world_, StrategyOptions{});
+  const std::unique_ptr<Strategy> soft = make_strategy("stratified:fade=3", *world_, StrategyOptions{});
+  EXPECT_EQ(soft->name(), "stratified:fade=3");
+  Camera camera;
+  int since_crossing = -1;  // frames since the last crossing after the first frame; -1 before any
+  size_t blended_pixels = 0;
+  for (size_t i = 0; i < path.frames.size(); ++i) {
+    apply(path.frames[i], camera);
+    render_frame(*hard, renderer, camera, path.frames[i].time);
+    const Image hard_color = renderer.read_color();
+    const IdImage hard_ids = renderer.read_ids();
+    render_frame(*soft, renderer, camera, path.frames[i].time);
+    const Image soft_color = renderer.read_color();
+    EXPECT_EQ(renderer.read_ids().ids, hard_ids.ids) << "frame " << i << ": the fading faces must keep the new ids";
+    if (dynamic_cast<StratifiedStrategy&>(*soft).crossed() && i > 0) since_crossing = 0;
+    else if (since_crossing >= 0) ++since_crossing;
+    const std::span<const FarFace> faces = soft->far_faces();
+    const bool fading = since_crossing >= 0 && since_crossing < kFade;
+    const std::vector<FarFace> old_faces = faces_where(faces, true, 1.0f);
+    EXPECT_EQ(!old_faces.empty(), fading) << "frame " << i;
+    for (const FarFace& f : faces)
+      if (f.opacity < 1.0f) {
+        EXPECT_FLOAT_EQ(f.opacity, 1.0f - float(since_crossing + 1) / (kFade + 1)) << "frame " << i;
+      }
+    if (!fading) {
+      EXPECT_EQ(soft_color.rgba, hard_color.rgba) << "frame " << i;
+      continue;
+    }
+    // Oracle: the new faces alone (A), the old faces alone and opaque (B); with both, a pixel the
+    // old faces cover is opacity·B + (1 − opacity)·A, any other is A.
+    const float a = faces.back().opacity;  // the old faces come last
+    auto draw = [&](const std::vector<FarFace>& drawn) {
+      renderer.render(camera, std::vector<DrawItem>{}, [](const DrawItem&) -> const Mesh* { return nullptr; }, drawn);
+    };
+    draw(faces_where(faces, false, 1.0f));
+    const Image only_new = renderer.read_color();
+    draw(old_faces);
+    const Image only_old = renderer.read_color();
+    const IdImage old_ids = renderer.read_ids();
+    draw({faces.begin(), faces.end()});
+    const Image both = renderer.read_color();
+    // Pixels at the edge of what the old faces cover are skipped: there the filtered colour's
+    // alpha, not the texel's id, decides whether a texel is drawn.
+    const int w = old_ids.width, h = old_ids.height;
+    auto covered = [&](int x, int y) { return old_ids.ids[size_t(std::clamp(y, 0, h - 1)) * w + std::clamp(x, 0, w - 1)] != kBackgroundId; };
+    for (size_t p = 0; p < old_ids.ids.size(); ++p)
+      for (int ch = 0; ch < 3; ++ch) {
+        const int x = int(p % w), y = int(p / w);
+        const bool in = covered(x, y);
+        if (covered(x - 1, y) != in || covered(x + 1, y) != in || covered(x, y - 1) != in || covered(x, y + 1) != in) continue;
+        const float n = only_new.rgba[p * 4 + ch], o = only_old.rgba[p * 4 + ch];
+        const float expected = in ? a * o + (1.0f - a) * n : n;
+        ASSERT_NEAR(both.rgba[p * 4 + ch], expected, 2.0f) << "frame " << i << " pixel " << p;
+        blended_pixels += old_ids.ids[p] != kBackgroundId && ch == 0 && std::abs(o - n) > 8.0f;
+      }
+  }
+  EXPECT_GT(dynamic_cast<StratifiedStrategy&>(*soft).counters().faded_frames, 0u);
+  EXPECT_GT(blended_pixels, 0u) << "the fade must show somewhere";
+}
+
 TEST_F(StratifiedSystem, ABudgetTooSmallForACellIsAnErrorNotACrash) {
   // Budgets between what the constructor checks and one cell's far field: the crossing that
   // cannot be held must throw Error and leave the budget balanced (no abort in a destructor).
@@ -445,6 +557,9 @@ TEST(StratifiedName, SettingsAreParsedAndBadOnesRefused) {
   EXPECT_DOUBLE_EQ(parse_stratified_strategy_name("stratified:lookahead=3").lookahead_s, 3.0);
   EXPECT_THROW(parse_stratified_strategy_name("stratified:show=nothing"), Error);
   EXPECT_THROW(parse_stratified_strategy_name("stratified:speed=2"), Error);
+  EXPECT_EQ(parse_stratified_strategy_name("stratified:fade=4").fade_frames, 4);
+  EXPECT_THROW(parse_stratified_strategy_name("stratified:fade=1.5"), Error);
+  EXPECT_THROW(parse_stratified_strategy_name("stratified:fade=61"), Error);
 }
 
 TEST(StratifiedWorld, AWorldWithoutThePreprocessingNamesTheCommand) {
@@ -505,11 +620,24 @@ TEST(StratifiedBench, WritesReportWithSaneFigures) {
   p.scale_others_every = 4;
   p.scale_fidelity_every = 10;
   p.scale_strategies = {"lod"};
+  p.bake_all_up_to = 1000;  // α = 10° baked whole, 2° along the path
+  p.fade_frames = 3;
   const nlohmann::ordered_json s = run_stratified_bench(p);
   const std::filesystem::path out = p.out_dir;
   const std::vector<uint8_t> bytes = test::slurp((out / "stratified.md").string());
   const std::string md(bytes.begin(), bytes.end());
-  for (const char* heading : {"## Table 6.1", "## Frame time", "## Fidelity", "## At city scale"}) EXPECT_NE(md.find(heading), std::string::npos) << heading;
+  for (const char* heading : {"## Table 6.1", "## Frame time", "## Fidelity", "## Crossings", "## At city scale"})
+    EXPECT_NE(md.find(heading), std::string::npos) << heading;
+  // Table 6.1: a configuration under the limit is baked whole (measured), a larger one along the path.
+  const auto& t61 = s["table61"];
+  ASSERT_EQ(t61.size(), 2u);
+  EXPECT_LE(t61[0]["cells"].get<uint64_t>(), p.bake_all_up_to);
+  EXPECT_EQ(t61[0]["baked"], t61[0]["cells"]);
+  EXPECT_GT(t61[1]["cells"].get<uint64_t>(), p.bake_all_up_to);
+  EXPECT_LT(t61[1]["baked"].get<uint64_t>(), t61[1]["cells"].get<uint64_t>());
+  EXPECT_NE(md.find("(measured)"), std::string::npos);
+  EXPECT_NE(md.find("(from the rate)"), std::string::npos);
+  for (const auto& c : t61) EXPECT_GT(c["stored_bytes"].get<uint64_t>(), c["color_bytes"].get<uint64_t>());
   EXPECT_NE(md.find(p.command_line), std::string::npos);
   for (const char* file : {"table61.csv", "frames.csv", "frame-times-seed3.svg"})
     EXPECT_GT(std::filesystem::file_size(out / "stratified" / file), 0u) << file;
@@ -517,6 +645,9 @@ TEST(StratifiedBench, WritesReportWithSaneFigures) {
   EXPECT_DOUBLE_EQ(walks["brute"]["speedup"].get<double>(), 1.0);
   EXPECT_LT(walks["stratified-10.0"]["triangles"].get<uint64_t>(), walks["brute"]["triangles"].get<uint64_t>() + 8);
   EXPECT_EQ(walks["stratified-10.0-noprefetch"]["stall_frames"], walks["stratified-10.0-noprefetch"]["crossings"]);
+  // The cross-fading walker crosses where the hard one does; both track how much a frame changes.
+  EXPECT_EQ(walks["stratified-10.0-fade=3"]["crossings"], walks["stratified-10.0"]["crossings"]);
+  for (const char* w : {"stratified-10.0", "stratified-10.0-fade=3"}) EXPECT_GT(walks[w]["change_elsewhere"].get<double>(), 0.0) << w;
   const double coarse = walks["stratified-10.0"]["max_far_angle_deg"].get<double>();
   const double fine = walks["stratified-2.0"]["max_far_angle_deg"].get<double>();
   EXPECT_GT(coarse, 0.0);

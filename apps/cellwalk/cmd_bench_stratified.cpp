@@ -33,6 +33,9 @@ void register_bench_stratified(CLI::App& bench, std::string (*command_line)()) {
   cmd->add_option("--frames", p.frames, "Frames of the path")->capture_default_str()->check(integer_in(2, 100000));
   cmd->add_option("--path-seed", p.path_seeds, "The paths' seeds, one path each")->capture_default_str()->check(integer_in(0, INT64_MAX));
   cmd->add_option("--along-margin", p.along_margin, "Cells within this of the path are baked (m)")->capture_default_str()->check(number_in(0, 1e5));
+  cmd->add_option("--bake-all-up-to", p.bake_all_up_to, "Bake every cell of an α with at most this many cells (measured); more: only along the paths (projected)")->capture_default_str()->check(integer_in(0, INT64_MAX));
+  cmd->add_option("--bake-threads", p.bake_threads, "Bake on this many threads")->capture_default_str()->check(integer_in(1, 64));
+  cmd->add_option("--fade", p.fade_frames, "Also walk stratified:fade=N (the cross-fade at crossings) at every α; 0: not")->capture_default_str()->check(integer_in(0, 60));
   cmd->add_option("--far-level-texels", p.far_level_texels, "Far objects baked at the coarsest level whose error covers under this many texels (0: full detail)")->capture_default_str()->check(number_in(0, 1e3));
   auto* scale = cmd->add_option("--scale-blocks", p.scale_blocks, "Also walk a city of N x N blocks (63: about 10^7 triangles) against brute and --scale-strategy; 0: none")->capture_default_str()->check(integer_in(0, 1000));
   cmd->add_option("--scale-path", p.scale_path_kind, "Path kind at city scale")->capture_default_str()->check(session_kind_check())->needs(scale);

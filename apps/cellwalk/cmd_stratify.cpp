@@ -9,12 +9,14 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <thread>
 
 #include <nlohmann/json.hpp>
 
 #include "cellwalk/core/error.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/stratified/bake_log.hpp"
+#include "cellwalk/systems/stratified/bake_pool.hpp"
 #include "cellwalk/systems/stratified/sizing.hpp"
 #include "cellwalk/systems/stratified/stored_stratified.hpp"
 #include "checks.hpp"
@@ -196,6 +198,7 @@ struct BuildOptions {
   float far_level_texels = stratified::BakeSettings{}.max_texels;
   std::string screen;  // "H[:FOV]": the resolution from the screen
   std::string shard;   // "i/N": bake shard i of N into a part file
+  int threads = 0;     // bakers in this process, each with a GL context of its own; 0: one a core
   std::vector<std::string> merge;  // part files to merge into the world
   bool json = false;
 };
@@ -260,7 +263,7 @@ struct BakeWork {
 
 // Bakes the cells of shard `shard` of `shards` that `log` does not hold yet, appending each.
 BakeWork bake_into(BakeLog& log, const World& world, const Viewcells& cells, const BakeSettings& settings, float b,
-                   int shard, int shards) {
+                   int shard, int shards, int threads) {
   BakeWork work;
   work.resumed = log.resumed();
   std::vector<CellId> computed, todo;
@@ -272,17 +275,18 @@ BakeWork bake_into(BakeLog& log, const World& world, const Viewcells& cells, con
   for (size_t i = from; i < to; ++i)
     if (!log.part().has(computed[i])) todo.push_back(computed[i]);
   if (todo.empty()) return work;
-  FarFieldBaker baker(world, settings);
-  Progress progress("stratify bake", todo.size());
-  StratifiedSizes scratch;
+  std::vector<BakeJob> jobs;
+  for (const CellId c : todo) jobs.push_back({cells.partition->cell(c).box.center(), b, cells.near.near(c)});
   const auto start = std::chrono::steady_clock::now();
+  BakePool pool(world, settings, threads, std::move(jobs));
+  Progress progress("stratify bake", todo.size());
   for (const CellId c : todo) {
-    log.append(c, baker.bake(cells.partition->cell(c).box.center(), b, cells.near.near(c)), b, scratch);
+    log.append(c, pool.next());
     progress.update(++work.baked);
   }
   progress.finish();
   work.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  work.triangles = baker.triangles_drawn();
+  work.triangles = pool.triangles_drawn();
   return work;
 }
 
@@ -313,7 +317,7 @@ void print_build(const BuildOptions& o, const std::string& out, float v, const V
   const uint64_t stored = sizes.color_bytes + sizes.id_bytes + sizes.depth_bytes;
   if (o.json) {
     const Json j = {{"output", part.empty() ? out : part}, {"alpha_deg", o.alpha_deg}, {"v", v}, {"b", o.box}, {"sizing", o.sizing},
-                    {"resolution", o.resolution}, {"far_level_texels", o.far_level_texels}, {"shard", o.shard.empty() ? Json(nullptr) : Json(o.shard)},
+                    {"resolution", o.resolution}, {"far_level_texels", o.far_level_texels}, {"threads", o.threads}, {"shard", o.shard.empty() ? Json(nullptr) : Json(o.shard)},
                     {"cells", cells.partition->cell_count()}, {"baked_now", work.baked}, {"resumed", work.resumed},
                     {"baked_cells", sizes.baked_cells}, {"kd_height", cells.height}, {"peak_held_ids", cells.peak_held_ids},
                     {"near_ids", sizes.near_ids}, {"near_bytes", sizes.near_bytes}, {"faces", sizes.faces},
@@ -345,6 +349,7 @@ void print_build(const BuildOptions& o, const std::string& out, float v, const V
 // back from the checkpoint or the parts, and removes the checkpoint.
 void run_build(BuildOptions o) {
   if (!o.screen.empty()) o.resolution = resolution_for_screen(o.screen);
+  if (o.threads == 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
   int shard = 0, shards = 1;
   if (!o.shard.empty()) visibility::parse_shard(o.shard, shard, shards);
   const std::string out = o.out.empty() ? o.world : o.out;
@@ -363,7 +368,7 @@ void run_build(BuildOptions o) {
   std::optional<BakeLog> log;
   if (o.merge.empty()) {
     log.emplace(part.empty() ? out + ".stratify-checkpoint" : part, hash, shard, shards);
-    work = bake_into(*log, world, cells, settings, float(o.box), shard, shards);
+    work = bake_into(*log, world, cells, settings, float(o.box), shard, shards, o.threads);
     if (!part.empty()) return print_build(o, out, v, cells, cells_s, {}, work, part);
     parts.push_back(log->part());
   } else {
@@ -371,7 +376,7 @@ void run_build(BuildOptions o) {
   }
   const StratifiedSizes sizes = write_world_with_stratified(world, out, cells, params, [&](CellId c) {
     for (const BakePart& p : parts)
-      if (p.has(c)) return p.far_field(c, float(o.box), o.resolution, world.object_count());
+      if (p.has(c)) return p.record(c, float(o.box), o.resolution, world.object_count());
     fail("stratify build --merge", "cell " + std::to_string(c) + " is in no part: the parts are of a shorter run; bake again");
   });
   if (log) {
@@ -408,6 +413,8 @@ void register_stratify_build(CLI::App& stratify) {
   auto* merge = cmd->add_option("--merge", o->merge, "Merge the part files of every shard into the world (give the shards' options)")
       ->expected(1, -1)->check(CLI::ExistingFile);
   shard->excludes(merge);
+  cmd->add_option("--threads", o->threads, "Bake on this many threads, each with a GL context of its own (the same bytes as one); 0: one a core")
+      ->check(CLI::Range(0, 64))->capture_default_str()->excludes(merge);
   cmd->add_flag("--json", o->json, "Machine-readable output");
   cmd->callback([o] { run_build(*o); });
 }

@@ -18,6 +18,7 @@
 #include "cellwalk/runtime/walk.hpp"
 #include "cellwalk/scene/path_generator.hpp"
 #include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/stratified/bake_pool.hpp"
 #include "cellwalk/systems/stratified/sizing.hpp"
 #include "cellwalk/systems/stratified/stored_stratified.hpp"
 #include "cellwalk/systems/stratified/stratified_strategy.hpp"
@@ -62,17 +63,20 @@ Config preprocess(const StratifiedBenchParams& p, const World& world, const Came
   for (ObjectId id = 0; id < world.object_count(); ++id) bounds[id] = world.object(id).bounds;
   Viewcells cells = build_viewcells(default_cell_region(world.info().bounds, world.info().nav, true), c.v, float(p.box), bounds);
   c.cells_s = bench::seconds_since(start);
-  cells.partition = visibility::cells_along(*cells.partition, path, p.along_margin);
-  FarFieldBaker baker(world, {.resolution = p.resolution, .max_texels = p.far_level_texels});
+  if (cells.partition->cell_count() > p.bake_all_up_to) cells.partition = visibility::cells_along(*cells.partition, path, p.along_margin);
+  const bench::Clock::time_point bake_start = bench::Clock::now();
+  std::vector<BakeJob> jobs;
+  for (CellId id = 0; id < cells.partition->cell_count(); ++id)
+    if (cells.partition->cell(id).computed()) jobs.push_back({cells.partition->cell(id).box.center(), float(p.box), cells.near.near(id)});
+  BakePool pool(world, {.resolution = p.resolution, .max_texels = p.far_level_texels}, p.bake_threads, std::move(jobs));
   Progress progress("bench stratified: bake α = " + fixed(alpha_deg, 1) + "°", 0);
   c.sizes = write_world_with_stratified(
-      world, file, cells, {float(rad(alpha_deg)), c.v, float(p.box), "eq22", p.resolution},
-      [&](CellId id) { return baker.bake(cells.partition->cell(id).box.center(), float(p.box), cells.near.near(id)); },
+      world, file, cells, {float(rad(alpha_deg)), c.v, float(p.box), "eq22", p.resolution}, [&](CellId) { return pool.next(); },
       [&](uint64_t done, uint64_t) { progress.update(done); });
   progress.finish();
   c.cells = c.sizes.cells;
   c.baked = c.sizes.baked_cells;
-  c.bake_s = c.sizes.bake_seconds;
+  c.bake_s = bench::seconds_since(bake_start);
   return c;
 }
 
@@ -90,7 +94,20 @@ struct Walker {
   std::vector<double> angles;                // far angle per frame (stratified)
   std::vector<bool> crossings;
   std::vector<FidelityFrame> fidelity;
+  // With track_change, per frame drawn the mean absolute change of its colour from the frame
+  // before (0 for the first): what a crossing's jump, or its cross-fade, shows the viewer.
+  bool track_change = false;
+  std::vector<double> change;
+  Image last_color;
 };
+
+// The mean absolute difference of the colour channels of two images of one size.
+double mean_change(const Image& a, const Image& b) {
+  uint64_t sum = 0;
+  for (size_t i = 0; i < a.rgba.size(); i += 4)
+    for (size_t ch = 0; ch < 3; ++ch) sum += uint64_t(std::abs(int(a.rgba[i + ch]) - int(b.rgba[i + ch])));
+  return a.rgba.empty() ? 0.0 : double(sum) / double(a.rgba.size() / 4 * 3);
+}
 
 RenderSettings render_settings(const StratifiedBenchParams& p) {
   RenderSettings s;
@@ -141,6 +158,11 @@ void walk_interleaved(std::vector<Walker>& walkers, Walker& truth, const CameraP
       w.frames.push_back(stats);
       w.angles.push_back(w.stratified ? w.stratified->far_angle(camera) : 0.0);
       w.crossings.push_back(w.stratified && w.stratified->crossed());
+      if (w.track_change) {
+        Image color = w.renderer->read_color();
+        w.change.push_back(w.last_color.rgba.empty() ? 0.0 : mean_change(color, w.last_color));
+        w.last_color = std::move(color);
+      }
       if (!compare) continue;
       Image diff;
       const Image color = w.renderer->read_color();
@@ -198,9 +220,10 @@ Table table61(const std::vector<Config>& configs, bool thesis) {
     const uint64_t stored = c.sizes.color_bytes + c.sizes.id_bytes + c.sizes.depth_bytes;
     const double per_cell_s = c.baked ? c.bake_s / double(c.baked) : 0.0;
     const double per_cell_bytes = c.baked ? double(stored) / double(c.baked) : 0.0;
+    const std::string how = c.baked == c.cells ? " (measured)" : " (from the rate)";
     rows.push_back({fixed(c.alpha_deg, 1) + "°", fixed(c.v, 2), std::to_string(c.cells), std::to_string(c.baked),
-                    fixed(1e3 * per_cell_s, 0), fixed(per_cell_s * double(c.cells) / 60.0, 1), fixed(c.cells_s, 2),
-                    fixed(per_cell_bytes / 1024.0, 1), fixed(per_cell_bytes * double(c.cells) / kMiB, 1),
+                    fixed(1e3 * per_cell_s, 0), fixed(per_cell_s * double(c.cells) / 60.0, 1) + how, fixed(c.cells_s, 2),
+                    fixed(per_cell_bytes / 1024.0, 1), fixed(per_cell_bytes * double(c.cells) / kMiB, 1) + how,
                     fixed(c.baked ? double(c.sizes.raw_face_bytes) / double(stored) : 0.0, 1),
                     thesis && i < 2 ? std::string(thesis_figures[i][0]) + " m; " + thesis_figures[i][1] + "; " + thesis_figures[i][2] : "—"});
   }
@@ -208,7 +231,7 @@ Table table61(const std::vector<Config>& configs, bool thesis) {
 }
 
 const std::vector<std::string> kTable61Header = {
-    "α", "v (m)", "cells", "baked", "bake ms / cell", "all cells, min (from the rate)", "near lists, s (all cells)",
+    "α", "v (m)", "cells", "baked", "bake ms / cell", "all cells, min", "near lists, s (all cells)",
     "stored KiB / cell", "all cells, MiB", "raw / stored", "thesis: v; preprocessing; storage"};
 
 const std::vector<std::string> kFramesHeader = {"path", "strategy", "frame ms mean", "sd", "p95", "max", "speed-up vs brute",
@@ -222,7 +245,7 @@ const std::vector<std::string> kFidelityHeader = {
 
 // The rows of one walked path: frame times, fidelity and per-frame figures, and the summary.
 struct Report {
-  Table frames_rows, fidelity_rows, per_frame;
+  Table frames_rows, fidelity_rows, per_frame, crossing_rows;
   Json summary = Json::object();  // path id -> walker label -> figures
 };
 
@@ -232,6 +255,22 @@ double mean_on(const Walker& w, const std::set<int>& frames) {
   for (const FrameStats& f : w.frames)
     if (frames.count(f.frame)) ms.push_back(f.frame_ms);
   return bench::mean(ms);
+}
+
+const std::vector<std::string> kCrossingHeader = {"path", "strategy", "crossings", "change at crossings, mean",
+                                                  "max", "change elsewhere, mean", "far angle max (measured)"};
+
+// How much the image changes at a crossing against the frames without one (the camera moves in
+// both), for a walker that tracked it.
+struct CrossingChange {
+  size_t crossings = 0;
+  double mean_at = 0, max_at = 0, mean_elsewhere = 0;
+};
+
+CrossingChange crossing_change(const Walker& w) {
+  std::vector<double> at, elsewhere;
+  for (size_t i = 1; i < w.change.size(); ++i) (w.crossings[i] ? at : elsewhere).push_back(w.change[i]);
+  return {at.size(), bench::mean(at), at.empty() ? 0.0 : *std::max_element(at.begin(), at.end()), bench::mean(elsewhere)};
 }
 
 // Adds the walkers' figures along path `path_id` to `r`; the first walker is brute force. A
@@ -264,6 +303,13 @@ void report_walk(const std::vector<Walker>& walkers, const std::string& path_id,
         {"crossings", s.crossings}, {"stall_frames", s.loads}, {"max_far_angle_deg", deg(worst)}, {"frames_over_alpha", over},
         {"psnr_db", std::isfinite(f.mean_psnr_db) ? Json(f.mean_psnr_db) : Json(nullptr)},
         {"missed", f.missed_objects}, {"visible", f.visible_objects}};
+    if (w.track_change) {
+      const CrossingChange c = crossing_change(w);
+      r.crossing_rows.push_back({path_id, w.label, std::to_string(c.crossings), fixed(c.mean_at, 2), fixed(c.max_at, 2),
+                                 fixed(c.mean_elsewhere, 2), fixed(deg(worst), 2) + "°"});
+      r.summary[path_id][w.label]["change_at_crossings"] = c.mean_at;
+      r.summary[path_id][w.label]["change_elsewhere"] = c.mean_elsewhere;
+    }
     for (size_t i = 0; i < w.frames.size(); ++i)
       r.per_frame.push_back({path_id, w.label, std::to_string(w.frames[i].frame), fixed(w.frames[i].frame_ms, 3),
                            std::to_string(w.frames[i].triangles), w.crossings[i] ? "1" : "0", w.frames[i].stall ? "1" : "0",
@@ -429,6 +475,12 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
     for (const Config& c : configs) {
       walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1), c.file, "stratified", p, rad(c.alpha_deg)));
       walkers.back().images = true;  // the -noprefetch runs draw the same images
+      walkers.back().track_change = p.fade_frames > 0;
+      if (p.fade_frames == 0) continue;
+      const std::string fade = "fade=" + std::to_string(p.fade_frames);
+      walkers.push_back(make_walker("stratified-" + fixed(c.alpha_deg, 1) + "-" + fade, c.file, "stratified:" + fade, p,
+                                    rad(c.alpha_deg)));
+      walkers.back().track_change = true;
     }
     // The thesis's own run time: every crossing loads in its frame.
     for (const Config& c : configs)
@@ -460,8 +512,10 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         std::to_string(p.height) + " images at " + fixed(p.fov_deg, 0) + "° field, llvmpipe; " +
         std::to_string(p.path_seeds.size()) + " " + p.path_kind + " paths of " + std::to_string(p.frames) +
         " frames (seeds as in the tables: a path along the city's edge looks out of it and sees little, one through it "
-        "sees much). Only the cells within " + fixed(p.along_margin, 0) +
-        " m of the paths are baked; preprocessing and storage for every cell are projected from the measured rate. " +
+        "sees much). An α with at most " + std::to_string(p.bake_all_up_to) + " cells is baked whole, so its row of "
+        "Table 6.1 is measured; a larger one only within " + fixed(p.along_margin, 0) + " m of the paths, and its "
+        "preprocessing and storage for every cell are projected from the measured rate. Baking runs on " +
+        std::to_string(p.bake_threads) + " threads, each with a GL context of its own. " +
         (p.far_level_texels > 0
              ? "Far objects are baked at the coarsest level whose error covers under " + fixed(p.far_level_texels, 2) +
                    " texel (`--far-level-texels`; the thesis drew full detail, `--far-level-texels 0`).\n\n"
@@ -480,10 +534,22 @@ Json run_stratified_bench(const StratifiedBenchParams& p) {
         "th frame is compared. The far angle is measured on every frame: the largest angle, over the far texels in view, "
         "between where the far point is (from the stored depth) and where its face shows it, seen from the eye. "
         "Difference images (128 + test − truth, the thesis's Figs. 6-4 to 6-7) are in `stratified/frame*-diff.png`.\n";
+  if (p.fade_frames > 0) {
+    md += "\n## Crossings: the hard switch and the cross-fade\n\n" + bench::md_table(kCrossingHeader, report.crossing_rows, bench::Align::kFigures);
+    md += "\nChange: the mean absolute difference of a frame's colour channels (0–255) from the frame before. At a crossing "
+          "the far field jumps by up to 2α as the faces of the next cell replace the last's; `fade=" + std::to_string(p.fade_frames) +
+          "` blends the last cell's faces over the new ones at falling opacity for " + std::to_string(p.fade_frames) +
+          " frames (the object ids stay the new cell's), so the jump is spread over them. Its far angle counts the fading "
+          "faces too, seen from outside their cell.\n";
+  }
   if (scale) md += scale_markdown(p, *scale, scale_report);
   write_file_atomically((out / "stratified.md").string(), md);
   Json summary = {{"world", {{"objects", world.object_count()}, {"triangles", world.triangle_count()}}},
                   {"far_level_texels", p.far_level_texels}, {"paths", report.summary}};
+  for (const Config& c : configs)
+    summary["table61"].push_back({{"alpha_deg", c.alpha_deg}, {"cells", c.cells}, {"baked", c.baked}, {"bake_seconds", c.bake_s},
+                                  {"stored_bytes", c.sizes.color_bytes + c.sizes.id_bytes + c.sizes.depth_bytes},
+                                  {"color_bytes", c.sizes.color_bytes}});
   if (scale)
     summary["scale"] = {{"objects", scale->objects}, {"triangles", scale->triangles}, {"walks", scale_report.summary["scale"]}};
   return summary;

@@ -37,6 +37,11 @@ struct StratifiedBenchParams {
   int frames = 300;                             // §6.1's path
   std::vector<uint64_t> path_seeds = {3, 6, 8};
   float along_margin = 0.0f;  // cells within this of the path are baked
+  // A configuration of at most this many cells is baked whole (Table 6.1 measured for every
+  // cell); a larger one only along the paths, its whole bake projected from the rate.
+  uint64_t bake_all_up_to = 2000;
+  int bake_threads = 2;       // bakers in the bench's process (BakePool)
+  int fade_frames = 4;        // a cross-fading walker per α (stratified:fade=N); 0: none
   int width = 512, height = 512;
   double fov_deg = 90.0;
   int fidelity_every = 10;

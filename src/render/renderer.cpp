@@ -231,7 +231,18 @@ struct Renderer::Impl {
       glProgramUniform3fv(far_program, render::kFarAxisVUniform, 1, glm::value_ptr(face.v));
       glProgramUniform1ui(far_program, render::kFarFaceIdUniform, pixel_id({face.id, 0, 0, DrawKind::kFarFace}));
       glProgramUniform1i(far_program, render::kFarHasIdsUniform, t.ids != 0);
+      const bool fading = face.opacity < 1.0f;
+      if (fading) {  // blend the colour attachment only; the ids keep what is underneath
+        glEnablei(GL_BLEND, 0);
+        glBlendColor(0.0f, 0.0f, 0.0f, std::clamp(face.opacity, 0.0f, 1.0f));
+        glBlendFunc(GL_CONSTANT_ALPHA, GL_ONE_MINUS_CONSTANT_ALPHA);
+        glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+      }
       glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+      if (fading) {
+        glDisablei(GL_BLEND, 0);
+        glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+      }
       stats.triangles += 2;
     }
     glEnable(GL_DEPTH_TEST);

@@ -80,7 +80,9 @@ using TextureSource = std::function<std::optional<Texture>(uint32_t index, uint3
 // there). `ids`, if given (same size), is written to the id buffer (object id + 1 per texel, 0
 // for none), so the objects the face shows count as drawn; without it the face writes
 // pixel_id({id, 0, ..., kFarFace}). The images must stay valid during render(); the renderer
-// keeps GL copies keyed by `id` (so one id must always show the same images).
+// keeps GL copies keyed by `id` (so one id must always show the same images). A face with
+// `opacity` < 1 is blended over what is drawn before it (colour · opacity + what is there ·
+// (1 − opacity)) and leaves the id buffer alone: a face fading out after a crossing.
 struct FarFace {
   uint32_t id = 0;
   Vec3 origin{0.0f};
@@ -88,6 +90,7 @@ struct FarFace {
   Vec3 v{0.0f};
   const Image* color = nullptr;
   const IdImage* ids = nullptr;
+  float opacity = 1.0f;  // in [0, 1]
 };
 
 // A world-space segment for overlays: frustums and boxes in a bird's-eye view.

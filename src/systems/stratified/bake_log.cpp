@@ -81,7 +81,17 @@ std::vector<CellId> BakePart::cells() const {
   return out;
 }
 
+std::vector<uint8_t> BakePart::record(CellId cell, float b, int resolution, uint64_t object_count) const {
+  std::vector<uint8_t> bytes = read_record(cell);
+  decode_far_field(bytes, b, resolution, object_count, path_ + "@" + std::to_string(records_.at(cell).first));
+  return bytes;
+}
+
 CellFarField BakePart::far_field(CellId cell, float b, int resolution, uint64_t object_count) const {
+  return decode_far_field(read_record(cell), b, resolution, object_count, path_ + "@" + std::to_string(records_.at(cell).first));
+}
+
+std::vector<uint8_t> BakePart::read_record(CellId cell) const {
   const auto& [offset, length] = records_.at(cell);
   std::ifstream in(path_, std::ios::binary);
   std::vector<uint8_t> bytes(length);
@@ -89,7 +99,7 @@ CellFarField BakePart::far_field(CellId cell, float b, int resolution, uint64_t 
   if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(length)))
     fail(path_ + "@" + std::to_string(offset), "cannot read the record of cell " + std::to_string(cell) +
                                                    ": the file changed while it was used; bake the shard again");
-  return decode_far_field(bytes, b, resolution, object_count, path_ + "@" + std::to_string(offset));
+  return bytes;
 }
 
 struct BakeLog::Writer {
@@ -119,11 +129,10 @@ BakeLog::BakeLog(const std::string& path, uint64_t hash, int shard, int shards) 
 
 BakeLog::~BakeLog() = default;
 
-void BakeLog::append(CellId cell, const CellFarField& field, float b, StratifiedSizes& sizes) {
+void BakeLog::append(CellId cell, std::span<const uint8_t> record) {
   std::vector<uint8_t> payload(4);
   const uint32_t id = cell;
   std::memcpy(payload.data(), &id, 4);
-  const std::vector<uint8_t> record = encode_far_field(field, b, sizes);
   payload.insert(payload.end(), record.begin(), record.end());
   std::vector<uint8_t> framed;
   append_framed_record(framed, payload);

@@ -111,6 +111,21 @@ std::vector<uint8_t> encode_far_field(const CellFarField& field, float b, Strati
   return std::move(w.bytes());
 }
 
+void count_far_record(std::span<const uint8_t> record, int resolution, StratifiedSizes& sizes) {
+  ByteReader r(record, "far-field record");
+  const uint32_t mask = r.get<uint32_t>("face mask");
+  for (int face = 0; face < kFaceCount; ++face) {
+    if (!(mask >> face & 1)) continue;
+    const uint32_t color = r.get<uint32_t>("colour bytes"), ids = r.get<uint32_t>("id bytes"), depth = r.get<uint32_t>("depth bytes");
+    r.get_array<uint8_t>(uint64_t(color) + ids + depth, "frames");
+    sizes.faces += 1;
+    sizes.raw_face_bytes += uint64_t(resolution) * resolution * (4 + 4 + 1);
+    sizes.color_bytes += color;
+    sizes.id_bytes += ids;
+    sizes.depth_bytes += depth;
+  }
+}
+
 CellFarField decode_far_field(std::span<const uint8_t> bytes, float b, int resolution, uint64_t object_count,
                               const std::string& where) {
   ByteReader r(bytes, where);
@@ -148,7 +163,7 @@ CellFarField decode_far_field(std::span<const uint8_t> bytes, float b, int resol
 
 StratifiedSizes write_world_with_stratified(const World& world, const std::string& out, const Viewcells& cells,
                                             const StratifiedParams& params,
-                                            const std::function<CellFarField(CellId)>& bake,
+                                            const std::function<std::vector<uint8_t>(CellId)>& bake,
                                             const std::function<void(uint64_t, uint64_t)>& progress) {
   const ViewCellPartition& partition = *cells.partition;
   const size_t n = partition.cell_count();
@@ -162,7 +177,9 @@ StratifiedSizes write_world_with_stratified(const World& world, const std::strin
     for (CellId c = 0; c < n; ++c) {
       far_offsets[c] = w.section_offset();
       if (!partition.cell(c).computed()) continue;
-      w.write(encode_far_field(bake(c), params.b, sizes));
+      const std::vector<uint8_t> record = bake(c);
+      count_far_record(record, params.resolution, sizes);
+      w.write(record);
       ++sizes.baked_cells;
       if (progress) progress(sizes.baked_cells, to_bake);
     }

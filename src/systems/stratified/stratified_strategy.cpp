@@ -63,8 +63,10 @@ StratifiedConfig parse_stratified_strategy_name(const std::string& name) {
       c.prefetch = s.number(0, 1) != 0;
     } else if (s.key == "lookahead") {
       c.lookahead_s = s.number(0, 60);
+    } else if (s.key == "fade") {
+      c.fade_frames = s.whole(0, 60);
     } else {
-      s.unknown("show, cull, prefetch, lookahead");
+      s.unknown("show, cull, prefetch, lookahead, fade");
     }
   });
   return c;
@@ -231,7 +233,7 @@ struct StratifiedStrategy::Impl {
   }
   ~Impl() {
     loader.reset();
-    store.buffer().budget().release(index_bytes + cell.bytes);
+    store.buffer().budget().release(index_bytes + cell.bytes + previous.bytes);
   }
 
   bool uses_faces() const {
@@ -243,8 +245,14 @@ struct StratifiedStrategy::Impl {
   // took in this frame.
   double enter(CellId c, FrameStats& stats) {
     Stopwatch watch;
-    faces.clear();
-    store.buffer().budget().release(cell.bytes);
+    drop_previous();
+    if (config.fade_frames > 0 && current && uses_faces()) {  // the cell left fades out, still charged
+      previous = std::move(cell);
+      previous_cell = current;
+      fade_step = 0;
+    } else {
+      store.buffer().budget().release(cell.bytes);
+    }
     cell = {};
     bool waited = false;
     std::optional<CellData> ready = loader ? loader->take(c, waited) : std::nullopt;
@@ -255,7 +263,12 @@ struct StratifiedStrategy::Impl {
       if (!waited) ++counters.prefetch_hits;
     } else {
       MemoryBudget& budget = store.buffer().budget();
-      ready = load_within(stored, c, uses_faces(), budget, [&](uint64_t bytes) { return store.buffer().reserve(bytes); });
+      auto reserve = [&](uint64_t bytes) { return store.buffer().reserve(bytes); };
+      ready = load_within(stored, c, uses_faces(), budget, reserve);
+      if (!ready && previous_cell) {  // the fade is a nicety: give its bytes to the load
+        drop_previous();
+        ready = load_within(stored, c, uses_faces(), budget, reserve);
+      }
       if (!ready)
         fail("stratified", "the memory budget cannot hold loading cell " + std::to_string(c) + "'s near list and far faces (" +
                                std::to_string(stored.load_bound(c)) + " bytes) beside the cells; raise --budget");
@@ -269,13 +282,6 @@ struct StratifiedStrategy::Impl {
       ++counters.stalls;
       stats.stall = true;
     }
-    const Vec3 centre = stored.partition().cell(c).box.center();
-    for (const FaceImage& f : cell.field.faces) {
-      FarFace quad = face_quad(centre, stored.params().b, f.face, c * kFaceCount + uint32_t(f.face));
-      quad.color = &f.color;
-      quad.ids = &f.ids;
-      faces.push_back(quad);
-    }
     current = c;
     counters.crossings += first ? 0 : 1;
     const double ms = watch.ms();
@@ -283,6 +289,39 @@ struct StratifiedStrategy::Impl {
     stats.io_ms += ms;
     peak = std::max(peak, store.resident_bytes());
     return ms;
+  }
+
+  // Releases the fading cell's bytes and forgets it.
+  void drop_previous() {
+    store.buffer().budget().release(previous.bytes);
+    previous = {};
+    previous_cell.reset();
+  }
+
+  // A frame without a crossing moves the fade on; it ends after fade_frames frames.
+  void advance_fade() {
+    if (previous_cell && ++fade_step >= config.fade_frames) drop_previous();
+  }
+
+  void append_faces(const CellData& data, CellId c, float opacity) {
+    const Vec3 centre = stored.partition().cell(c).box.center();
+    for (const FaceImage& f : data.field.faces) {
+      FarFace quad = face_quad(centre, stored.params().b, f.face, c * kFaceCount + uint32_t(f.face));
+      quad.color = &f.color;
+      quad.ids = &f.ids;
+      quad.opacity = opacity;
+      faces.push_back(quad);
+    }
+  }
+
+  // The current cell's faces, then the fading cell's over them: k frames after the crossing
+  // (k = 0 at the crossing) at opacity 1 − (k + 1)/(fade_frames + 1).
+  void make_faces() {
+    faces.clear();
+    append_faces(cell, *current, 1.0f);
+    if (!previous_cell) return;
+    append_faces(previous, *previous_cell, 1.0f - float(fade_step + 1) / float(config.fade_frames + 1));
+    ++counters.faded_frames;
   }
 
   // Asks the loader for the cells the viewer reaches within the lookahead at its present
@@ -333,7 +372,9 @@ struct StratifiedStrategy::Impl {
                     ", which `cellwalk stratify build --along` left unbaked; rebuild with the path it walks or without --along").c_str(),
                    camera.position);
     crossed = !current || *current != *c;
+    if (!crossed) advance_fade();
     const double load_ms = crossed ? enter(*c, stats) : 0.0;
+    make_faces();
     prefetch(camera, stats.time);
     ++counters.frames;
     counters.near_objects += cell.near.size();
@@ -361,6 +402,9 @@ struct StratifiedStrategy::Impl {
   std::optional<CellId> current;
   bool crossed = false;
   CellData cell;  // the current cell's
+  CellData previous;  // the cell left at the last crossing, while its faces fade out
+  std::optional<CellId> previous_cell;
+  int fade_step = 0;  // frames since that crossing
   std::vector<FarFace> faces;
   std::shared_ptr<const Mesh> mesh;  // handed to the renderer for upload
   StratifiedCounters counters;
@@ -380,6 +424,7 @@ std::string StratifiedStrategy::name() const {
   auto add = [&](const std::string& setting) { name += (name.find(':') == std::string::npos ? ":" : ",") + setting; };
   if (!impl_->config.cull) add("cull=0");
   if (!impl_->config.prefetch) add("prefetch=0");
+  if (impl_->config.fade_frames > 0) add("fade=" + std::to_string(impl_->config.fade_frames));
   return name;
 }
 
@@ -397,8 +442,12 @@ std::span<const FarFace> StratifiedStrategy::far_faces() const { return impl_->f
 
 double StratifiedStrategy::far_angle(const Camera& camera) const {
   if (!impl_->current) return 0.0;
-  const Vec3 centre = impl_->stored.partition().cell(*impl_->current).box.center();
-  return far_field_angle(impl_->cell.field, centre, impl_->stored.params().b, camera);
+  // A fading cell is seen from outside it: its faces count too, however faint.
+  const auto angle = [&](const CellData& data, CellId c) {
+    return far_field_angle(data.field, impl_->stored.partition().cell(c).box.center(), impl_->stored.params().b, camera);
+  };
+  const double now = angle(impl_->cell, *impl_->current);
+  return impl_->previous_cell ? std::max(now, angle(impl_->previous, *impl_->previous_cell)) : now;
 }
 
 bool StratifiedStrategy::crossed() const { return impl_->crossed; }

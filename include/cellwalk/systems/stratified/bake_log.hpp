@@ -38,8 +38,10 @@ class BakePart {
   size_t size() const { return records_.size(); }
   std::vector<CellId> cells() const;  // those with a record, ascending
   uint64_t valid_bytes() const { return valid_bytes_; }
-  // The cell's record, decoded. REQUIRES has(cell). Throws Error naming the file when it
-  // changed since it was read or the record is damaged.
+  // The cell's record as stored, checked by decoding it. REQUIRES has(cell). Throws Error naming
+  // the file when it changed since it was read or the record is damaged.
+  std::vector<uint8_t> record(CellId cell, float b, int resolution, uint64_t object_count) const;
+  // The cell's record, decoded; the same REQUIRES and errors.
   CellFarField far_field(CellId cell, float b, int resolution, uint64_t object_count) const;
   // Records a cell appended after `offset` with `bytes` payload bytes (BakeLog's bookkeeping).
   void index(CellId cell, uint64_t offset, uint32_t bytes) { records_[cell] = {offset, bytes}; }
@@ -47,6 +49,7 @@ class BakePart {
  private:
   BakePart() = default;
   friend class BakeLog;
+  std::vector<uint8_t> read_record(CellId cell) const;  // unchecked
   std::string path_;
   uint64_t hash_ = 0;
   int shard_ = 0, shards_ = 1;
@@ -63,8 +66,8 @@ class BakeLog {
   ~BakeLog();
   const BakePart& part() const { return part_; }
   size_t resumed() const { return resumed_; }
-  // Encodes and appends the cell's far field (one write()); `sizes` gets its encoded sizes.
-  void append(CellId cell, const CellFarField& field, float b, StratifiedSizes& sizes);
+  // Appends the cell's far-field record (encode_far_field's bytes) in one write().
+  void append(CellId cell, std::span<const uint8_t> record);
 
  private:
   BakePart part_;

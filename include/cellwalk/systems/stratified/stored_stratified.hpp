@@ -40,7 +40,7 @@ struct StratifiedSizes {
   uint64_t faces = 0;              // non-empty faces stored
   uint64_t near_ids = 0;           // Σ near-list lengths
   uint64_t near_bytes = 0;         // the near lists as stored
-  uint64_t raw_face_bytes = 0;     // the faces' texels uncompressed: RGBA8 + u32 id + u16 depth
+  uint64_t raw_face_bytes = 0;     // the faces' texels uncompressed: RGBA8 + u32 id + u8 depth
   uint64_t color_bytes = 0;        // compressed
   uint64_t id_bytes = 0;
   uint64_t depth_bytes = 0;
@@ -53,14 +53,18 @@ std::vector<uint8_t> encode_far_field(const CellFarField& field, float b, Strati
 // id past `object_count`.
 CellFarField decode_far_field(std::span<const uint8_t> bytes, float b, int resolution, uint64_t object_count,
                               const std::string& where);
+// Adds a record's faces and encoded sizes to `sizes`. REQUIRES: a record encode_far_field made
+// (or decode_far_field accepted) at this resolution.
+void count_far_record(std::span<const uint8_t> record, int resolution, StratifiedSizes& sizes);
 
 // Writes `out`: every section of `world` but old stratified ones, then "farfield", baking each
-// computed cell of `cells.partition` (in id order) with `bake`, then "stratified". Atomic:
+// computed cell of `cells.partition` (in id order) as `bake` gives its record (encode_far_field's
+// bytes, written as they are), then "stratified". Atomic:
 // nothing appears at `out` until it is complete, so `out` may be the world's own path.
 // `progress` gets (cells done, cells to bake).
 StratifiedSizes write_world_with_stratified(const World& world, const std::string& out, const Viewcells& cells,
                                             const StratifiedParams& params,
-                                            const std::function<CellFarField(CellId)>& bake,
+                                            const std::function<std::vector<uint8_t>(CellId)>& bake,
                                             const std::function<void(uint64_t, uint64_t)>& progress = {});
 
 // Reads a world's stratified sections. Thread-safety: const methods may be called concurrently.

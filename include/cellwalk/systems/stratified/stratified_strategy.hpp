@@ -22,12 +22,16 @@ namespace cellwalk {
 //                     velocity (the thesis's future work, §7), so a crossing finds them ready
 //                     (0: every crossing loads in its frame, as the thesis's did)
 //   lookahead=1.5     seconds of motion ahead whose cells are prefetched
+//   fade=0            frames over which the previous cell's far faces fade out after a crossing,
+//                     blended over the new cell's, to hide the far field's jump of up to 2α
+//                     (digest §3.7; 0: the thesis's hard switch)
 struct StratifiedConfig {
   enum class Show { kFull, kNear, kFarObjects, kFarTexture, kBrute };
   Show show = Show::kFull;
   bool cull = true;
   bool prefetch = true;
   double lookahead_s = 1.5;
+  int fade_frames = 0;
 };
 bool is_stratified_strategy_name(const std::string& name);
 StratifiedConfig parse_stratified_strategy_name(const std::string& name);
@@ -42,6 +46,7 @@ struct StratifiedCounters {
   uint64_t prefetched = 0;      // cells loaded ahead by the prefetcher
   uint64_t prefetch_hits = 0;   // crossings that found their cell loaded
   uint64_t stalls = 0;          // crossings (after the first frame) that had to load or wait for their cell
+  uint64_t faded_frames = 0;    // frames that drew a previous cell's faces fading out
 };
 
 class StratifiedStrategy : public Strategy {
