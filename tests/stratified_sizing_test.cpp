@@ -201,6 +201,8 @@ TEST(StratifiedSizing, Eq45CorrectedScalesWithCrossingsNotVolume) {
 
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/store/world.hpp"
+#include "cellwalk/systems/stratified/stored_stratified.hpp"
 #include "test_support.hpp"
 
 namespace cellwalk::stratified {
@@ -265,6 +267,9 @@ TEST(StratifyBuild, ScreenGivesTheResolutionAndLevelsCutTheBakedTriangles) {
   const auto coarse = build("--screen 48:90 --far-level-texels 50");
   EXPECT_EQ(coarse["baked_cells"], screen["baked_cells"]);
   EXPECT_LT(coarse["bake_triangles_per_cell"].get<uint64_t>(), screen["bake_triangles_per_cell"].get<uint64_t>());
+  // The world records the level bound it was baked with.
+  const World baked(dir.file("s.cww"));
+  EXPECT_FLOAT_EQ(StoredStratified(baked).params().far_level_texels, 50.0f);
 }
 
 TEST(StratifyBuild, BadInputGetsOneLineAndLeavesTheWorldAlone) {

@@ -349,7 +349,9 @@ void print_build(const BuildOptions& o, const std::string& out, float v, const V
 // back from the checkpoint or the parts, and removes the checkpoint.
 void run_build(BuildOptions o) {
   if (!o.screen.empty()) o.resolution = resolution_for_screen(o.screen);
-  if (o.threads == 0) o.threads = int(std::max(1u, std::thread::hardware_concurrency()));
+  // One a core, at most 8: each thread holds a GL context and its caches (llvmpipe's own threads
+  // already spread each draw over the cores).
+  if (o.threads == 0) o.threads = int(std::clamp(std::thread::hardware_concurrency(), 1u, 8u));
   int shard = 0, shards = 1;
   if (!o.shard.empty()) visibility::parse_shard(o.shard, shard, shards);
   const std::string out = o.out.empty() ? o.world : o.out;
@@ -360,7 +362,7 @@ void run_build(BuildOptions o) {
   const auto start = std::chrono::steady_clock::now();
   const Viewcells cells = make_cells(o, world, v);
   const double cells_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const StratifiedParams params{float(rad(o.alpha_deg)), v, float(o.box), o.sizing, o.resolution};
+  const StratifiedParams params{float(rad(o.alpha_deg)), v, float(o.box), o.sizing, o.resolution, o.far_level_texels};
   const BakeSettings settings{.resolution = o.resolution, .max_texels = o.far_level_texels};
   const uint64_t hash = bake_run_hash(world, cells, params, settings);
   BakeWork work;
@@ -413,7 +415,7 @@ void register_stratify_build(CLI::App& stratify) {
   auto* merge = cmd->add_option("--merge", o->merge, "Merge the part files of every shard into the world (give the shards' options)")
       ->expected(1, -1)->check(CLI::ExistingFile);
   shard->excludes(merge);
-  cmd->add_option("--threads", o->threads, "Bake on this many threads, each with a GL context of its own (the same bytes as one); 0: one a core")
+  cmd->add_option("--threads", o->threads, "Bake on this many threads, each with a GL context of its own (the same bytes as one); 0: one a core, at most 8")
       ->check(CLI::Range(0, 64))->capture_default_str()->excludes(merge);
   cmd->add_flag("--json", o->json, "Machine-readable output");
   cmd->callback([o] { run_build(*o); });

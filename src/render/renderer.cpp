@@ -241,6 +241,7 @@ struct Renderer::Impl {
       glDrawArrays(GL_TRIANGLE_STRIP, 0, 4);
       if (fading) {
         glDisablei(GL_BLEND, 0);
+        glBlendFunc(GL_ONE, GL_ZERO);
         glColorMaski(1, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
       }
       stats.triangles += 2;

@@ -14,7 +14,9 @@
 namespace cellwalk::stratified {
 namespace {
 
-constexpr char kMagic[8] = {'C', 'W', 'S', 'T', 'R', 'B', 'K', '1'};
+// '2': records hold 8-bit depth (farfield version 2); a file of '1' is refused, or discarded as
+// a checkpoint.
+constexpr char kMagic[8] = {'C', 'W', 'S', 'T', 'R', 'B', 'K', '2'};
 constexpr uint64_t kHeaderBytes = 8 + 8 + 4 + 4 + 8;  // magic, run hash, shard, shards, header checksum
 
 std::vector<uint8_t> header(uint64_t hash, int shard, int shards) {
@@ -56,7 +58,8 @@ BakePart::BakePart(const std::string& path) : path_(path) {
   const std::vector<uint8_t> bytes = read_checkpoint_file(path);
   ByteReader r(bytes, path);
   if (r.get_array<char>(8, "magic") != std::vector<char>(kMagic, kMagic + 8))
-    r.error("not a stratify part or checkpoint (bad magic): give the files `stratify build --shard` wrote");
+    r.error("not a stratify part or checkpoint of this cellwalk (bad magic): give the files this version's "
+            "`stratify build --shard` wrote");
   hash_ = r.get<uint64_t>("run hash");
   shard_ = int(r.get<uint32_t>("shard"));
   shards_ = int(r.get<uint32_t>("shards"));

@@ -53,9 +53,9 @@ std::span<uint8_t> as_writable_bytes(std::vector<T>& v) {
 // Depth as 8 bits of disparity s = (b/2)/d (s <= 1 for far texels, which lie outside the box):
 // q = 1 + floor(254·s), clamped to [1, 255]; 0 = nothing there. Decoding gives the farthest
 // distance the byte allows, (b/2)·254/(q − 1), infinite for q = 1. Why disparity: the far
-// field's angular error grows like 1/(face distance) − 1/d, so equal steps of s are equal steps
-// of error, and 254 of them measure an angle of α to within about α/254. Why the farthest: the
-// error seen from any eye grows with d beyond the face, so the measured angle is an upper bound.
+// field's angular error grows like 1/(face distance) − 1/d, so equal steps of s are nearly equal
+// steps of error (about α/254 each, more as the eye nears the face). Why the farthest: the error
+// seen from any eye grows with d beyond the face, so the measured angle is an upper bound.
 std::vector<uint8_t> quantise_depth(const std::vector<float>& depth, float b) {
   std::vector<uint8_t> q(depth.size(), 0);
   for (size_t i = 0; i < depth.size(); ++i)
@@ -194,6 +194,7 @@ StratifiedSizes write_world_with_stratified(const World& world, const std::strin
     s.put(params.b);
     s.put_string(params.sizing);
     s.put(uint32_t(params.resolution));
+    s.put(params.far_level_texels);
     s.put(uint64_t(world.object_count()));
     const std::vector<uint8_t> part = serialize_partition(partition);
     s.put(uint64_t(part.size()));
@@ -230,9 +231,11 @@ StoredStratified::StoredStratified(const World& world) : world_(world) {
   params_.b = r.get<float>("b");
   params_.sizing = r.get_string("sizing");
   params_.resolution = int(r.get<uint32_t>("resolution"));
+  params_.far_level_texels = r.get<float>("far level texels");
   if (!(params_.v > 0 && params_.b > params_.v && std::isfinite(params_.b)) || !(params_.alpha > 0))
     r.error("sizes are not 0 < v < b with α > 0");
   if (params_.resolution < 1 || params_.resolution > kMaxFaceResolution) r.error("face resolution out of range");
+  if (!(params_.far_level_texels >= 0.0f) || !std::isfinite(params_.far_level_texels)) r.error("far level texels not 0 or more");
   if (r.get<uint64_t>("object count") != world.object_count()) r.error("object count differs from the world's");
   const uint64_t part_bytes = r.get<uint64_t>("partition bytes");
   partition_ = deserialize_partition(r.get_array<uint8_t>(part_bytes, "partition"), path + " section stratified (cells)");

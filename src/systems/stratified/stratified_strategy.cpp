@@ -10,6 +10,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <deque>
+#include <iterator>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -240,13 +241,20 @@ struct StratifiedStrategy::Impl {
     return config.show == StratifiedConfig::Show::kFull || config.show == StratifiedConfig::Show::kFarTexture;
   }
 
-  // Makes `c` the current cell: its data from the loader, or loaded here (a stall after the
-  // first frame). The previous cell's bytes are released first. Returns the milliseconds it
-  // took in this frame.
+  // Makes `c` the current cell: the fading cell when the viewer turned back into it, its data
+  // from the loader, or loaded here (a stall after the first frame). With a fade, the cell left
+  // becomes the fading one, still charged; otherwise its bytes are released. Returns the
+  // milliseconds it took in this frame.
   double enter(CellId c, FrameStats& stats) {
     Stopwatch watch;
+    std::optional<CellData> back;  // the fading cell, entered again: nothing to load
+    if (previous_cell == c) {
+      back = std::move(previous);
+      previous = {};
+      previous_cell.reset();
+    }
     drop_previous();
-    if (config.fade_frames > 0 && current && uses_faces()) {  // the cell left fades out, still charged
+    if (config.fade_frames > 0 && current && !cell.field.faces.empty()) {
       previous = std::move(cell);
       previous_cell = current;
       fade_step = 0;
@@ -254,9 +262,25 @@ struct StratifiedStrategy::Impl {
       store.buffer().budget().release(cell.bytes);
     }
     cell = {};
+    const bool first = !current.has_value();
+    if (back)
+      cell = std::move(*back);
+    else
+      load(c, first, stats);
+    current = c;
+    counters.crossings += first ? 0 : 1;
+    const double ms = watch.ms();
+    counters.load_ms += ms;
+    stats.io_ms += ms;
+    peak = std::max(peak, store.resident_bytes());
+    return ms;
+  }
+
+  // Makes cell `c`'s data the current one, from the loader or read here; counts a stall when a
+  // frame after the first had to load it or wait for it.
+  void load(CellId c, bool first, FrameStats& stats) {
     bool waited = false;
     std::optional<CellData> ready = loader ? loader->take(c, waited) : std::nullopt;
-    const bool first = !current.has_value();
     const bool from_loader = ready.has_value();
     if (ready) {
       cell = std::move(*ready);
@@ -282,13 +306,6 @@ struct StratifiedStrategy::Impl {
       ++counters.stalls;
       stats.stall = true;
     }
-    current = c;
-    counters.crossings += first ? 0 : 1;
-    const double ms = watch.ms();
-    counters.load_ms += ms;
-    stats.io_ms += ms;
-    peak = std::max(peak, store.resident_bytes());
-    return ms;
   }
 
   // Releases the fading cell's bytes and forgets it.
@@ -386,7 +403,14 @@ struct StratifiedStrategy::Impl {
         if (drawn_as_polygon(id, next_near) && (!config.cull || frustum.intersects(world.object(id).bounds)))
           items.push_back({id, 0, world.object(id).color});
     } else if (config.show != StratifiedConfig::Show::kFarTexture) {
-      for (const ObjectId id : cell.near)
+      // While the cell left fades, its near objects stay polygons: its faces do not show them,
+      // so they would fade out with them.
+      if (previous_cell) {
+        near_union.clear();
+        std::set_union(cell.near.begin(), cell.near.end(), previous.near.begin(), previous.near.end(),
+                       std::back_inserter(near_union));
+      }
+      for (const ObjectId id : previous_cell ? near_union : cell.near)
         if (!config.cull || frustum.intersects(world.object(id).bounds)) items.push_back({id, 0, world.object(id).color});
     }
     stats.query_ms += watch.ms() - load_ms;
@@ -405,6 +429,7 @@ struct StratifiedStrategy::Impl {
   CellData previous;  // the cell left at the last crossing, while its faces fade out
   std::optional<CellId> previous_cell;
   int fade_step = 0;  // frames since that crossing
+  std::vector<ObjectId> near_union;  // the two cells' near lists while one fades
   std::vector<FarFace> faces;
   std::shared_ptr<const Mesh> mesh;  // handed to the renderer for upload
   StratifiedCounters counters;

@@ -43,10 +43,9 @@ class BakePart {
   std::vector<uint8_t> record(CellId cell, float b, int resolution, uint64_t object_count) const;
   // The cell's record, decoded; the same REQUIRES and errors.
   CellFarField far_field(CellId cell, float b, int resolution, uint64_t object_count) const;
-  // Records a cell appended after `offset` with `bytes` payload bytes (BakeLog's bookkeeping).
-  void index(CellId cell, uint64_t offset, uint32_t bytes) { records_[cell] = {offset, bytes}; }
-
  private:
+  // Records a cell appended after `offset` with `bytes` payload bytes.
+  void index(CellId cell, uint64_t offset, uint32_t bytes) { records_[cell] = {offset, bytes}; }
   BakePart() = default;
   friend class BakeLog;
   std::vector<uint8_t> read_record(CellId cell) const;  // unchecked

@@ -34,8 +34,8 @@ class BakePool {
   BakePool(const BakePool&) = delete;
   BakePool& operator=(const BakePool&) = delete;
   // The next job's far-field record (encode_far_field's bytes). REQUIRES: fewer calls than
-  // jobs. Rethrows the Error of a worker (a bad setting, no GL context, a damaged object) the
-  // first time it is reached.
+  // jobs. Once a worker has failed (a bad setting, no GL context, a damaged object), gives the
+  // records already baked in order and then rethrows its Error.
   std::vector<uint8_t> next();
   // Triangles drawn by the cells baked so far.
   uint64_t triangles_drawn() const;

@@ -46,8 +46,9 @@ struct CellFarField {
 
 // The far field's angular error seen from `camera` [ours; the thesis only bounds it, §2.3]: the
 // largest angle, over the baked texels inside the camera's frustum, between where the far point
-// really is (P = c + its view ray · depth) and where the face shows it (Q, the texel's centre on
-// the face), both seen from the eye. Radians; 0 when no far texel is in view.
+// really is (P = c + its view ray · depth; at infinite depth, the ray's direction) and where the
+// face shows it (Q, the texel's centre on the face), both seen from the eye. Radians; 0 when no
+// far texel is in view.
 double far_field_angle(const CellFarField& field, const Vec3& c, float b, const Camera& camera);
 
 // How far faces are drawn.

@@ -2,12 +2,12 @@
 // sizing, the k-d viewcells, every cell's near list (section "stratified") and every baked cell's
 // far faces (section "farfield"). Byte layout: docs/format.md, "`stratified` and `farfield`".
 //
-// Far-face codec: zstd, lossless, per channel — colour RGBA8, ids (object id + 1) and depth
-// quantised to 16 bits as q = round(65535·(b/2)/d) (d >= b/2 for every far texel; 0 = none),
-// stored as differences along rows in two byte planes.
-// Lossless colour keeps the image comparison about parallax, not codec artefacts; ids and depth
-// must be exact for the missed-object count and the measured angular error; zstd is already
-// a dependency and decodes a 512² face in about a millisecond.
+// Far-face codec: zstd per channel — colour RGBA8 and ids (object id + 1) lossless, depth as 8
+// bits of disparity, q = 1 + min(254, ⌊254·(b/2)/d⌋) (0 = none), stored as differences along
+// rows and decoded to the farthest distance of its step, so the angle measured from it is an
+// upper bound. Lossless colour keeps the image comparison about parallax, not codec artefacts;
+// ids must be exact for the missed-object count; zstd is already a dependency and decodes a 512²
+// face in about a millisecond.
 #pragma once
 
 #include <cstdint>
@@ -32,6 +32,7 @@ struct StratifiedParams {
   float v = 0, b = 0;     // metres
   std::string sizing;     // "eq22", "strict", "numerical" or "given"
   int resolution = 512;   // texels per face side
+  float far_level_texels = 0.5f;  // the bake's BakeSettings::max_texels (0: full detail)
 };
 
 struct StratifiedSizes {
