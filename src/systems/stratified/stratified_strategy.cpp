@@ -351,7 +351,7 @@ struct StratifiedStrategy::Impl {
       for (int k = 1; k <= 6; ++k) {
         const std::optional<CellId> c =
             stored.partition().locate(camera.position + velocity * float(config.lookahead_s * k / 6.0));
-        if (c && c != current && stored.partition().cell(*c).computed() &&
+        if (c && c != current && c != previous_cell && stored.partition().cell(*c).computed() &&
             std::find(wanted.begin(), wanted.end(), *c) == wanted.end())
           wanted.push_back(*c);
       }
