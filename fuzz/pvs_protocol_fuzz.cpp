@@ -26,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const std::span<const uint8_t> in(data + 1, size - 1);
   try {
-    switch (data[0] % 8) {
+    switch (data[0] % 10) {
       case 0:
         if (in.size() == net::kFrameHeaderBytes) net::parse_frame_header(in, 1u << 20);
         break;
@@ -37,6 +37,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       case 5: round_trip(pvs_stream::parse_object(in), pvs_stream::encode_object, in); break;
       case 6: round_trip(pvs_stream::parse_done(in), pvs_stream::encode_done, in); break;
       case 7: pvs_stream::parse_error(in); break;
+      case 8: pvs_stream::parse_catalog_request(in); break;
+      case 9: round_trip(pvs_stream::parse_catalog(in), pvs_stream::encode_catalog, in); break;
     }
   } catch (const net::ProtocolError&) {
   }

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <sstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <vector>
@@ -17,6 +19,7 @@
 #include "cellwalk/core/random.hpp"
 #include "cellwalk/metrics/fidelity.hpp"
 #include "metrics/distance_transform.hpp"
+#include "test_support.hpp"
 
 namespace cellwalk {
 namespace {
@@ -316,6 +319,46 @@ TEST(PixelError, SummaryTakesTheWorseDirectionAndCountsFramesOver1Px) {
   EXPECT_EQ(j["pixel_error"]["p999_px"], 2.5);
   EXPECT_EQ(j["pixel_error"]["frames_max_over_1px"], 0.5);
   EXPECT_EQ(j["pixel_error"]["unmatched_truth_pixels"], 3);
+}
+
+// Every row of the fidelity CSV has one value under each heading, and each value is its own
+// column's (the header once lacked missed_drawn and largest_missed_pixels).
+TEST(PixelError, FidelityCsvRowsMatchTheirHeader) {
+  FidelityFrame f;
+  f.frame = 30;
+  f.visible_objects = 9;
+  f.missed_objects = 2;
+  f.missed_drawn = 1;
+  f.largest_missed_pixels = 17;
+  f.missed_ids = {4, 8};
+  f.width = 10;
+  f.test_to_truth = {2.5, 2.0, 3, 12};
+  const test::TempDir dir;
+  write_fidelity_csv({f}, dir.file("f.csv"));
+  std::ifstream in(dir.file("f.csv"));
+  std::string header, row;
+  std::getline(in, header);
+  std::getline(in, row);
+  const auto split = [](const std::string& line) {
+    std::vector<std::string> cells;
+    std::stringstream s(line);
+    for (std::string c; std::getline(s, c, ',');) cells.push_back(c);
+    if (!line.empty() && line.back() == ',') cells.push_back("");
+    return cells;
+  };
+  const std::vector<std::string> names = split(header), values = split(row);
+  ASSERT_EQ(names.size(), values.size()) << header << "\n" << row;
+  const auto value = [&](const std::string& name) {
+    const auto at = std::find(names.begin(), names.end(), name);
+    return at == names.end() ? std::string("(no column)") : values[size_t(at - names.begin())];
+  };
+  EXPECT_EQ(value("missed_objects"), "2");
+  EXPECT_EQ(value("missed_drawn"), "1");
+  EXPECT_EQ(value("largest_missed_pixels"), "17");
+  EXPECT_EQ(value("test_to_truth_max_px"), "2.5");
+  EXPECT_EQ(value("worst_x"), "2");
+  EXPECT_EQ(value("worst_y"), "1");
+  EXPECT_EQ(value("missed_object_ids"), "3 7");  // object ids: pixel ids less one
 }
 
 }  // namespace

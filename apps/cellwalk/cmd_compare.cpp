@@ -1,7 +1,10 @@
 // cellwalk compare: fidelity of one strategy or several against ground truth along a path.
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "cellwalk/core/atomic_file.hpp"
 #include "cellwalk/metrics/fidelity.hpp"
@@ -20,6 +23,7 @@ namespace {
 
 struct CompareArgs : ReplayOptions {
   CompareOptions options;
+  std::string captured;  // a folder of frames drawn elsewhere (web/test/walk.mjs)
 };
 
 struct NamedFidelity {
@@ -80,6 +84,68 @@ NamedFidelity compare_one(const CompareArgs& args, const World& world, const Cam
   return {label, summary};
 }
 
+std::string read_file(const std::string& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) fail(file, "cannot be read; rerun web/test/walk.mjs to capture the frames");
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// What web/test/walk.mjs wrote: captured.json (the size, the frames) and each frame's images.
+std::vector<CapturedFrame> read_captured(const std::string& folder, int& width, int& height) {
+  const std::string manifest = folder + "/captured.json";
+  nlohmann::json j;
+  try {
+    j = nlohmann::json::parse(read_file(manifest));
+    width = j.at("width").get<int>();
+    height = j.at("height").get<int>();
+  } catch (const nlohmann::json::exception& e) {
+    fail(manifest, std::string("not a capture manifest (") + e.what() + "); rerun web/test/walk.mjs");
+  }
+  if (width < 16 || height < 16 || width > 8192 || height > 8192) fail(manifest, "an image size out of 16..8192");
+  const size_t pixels = size_t(width) * size_t(height);
+  auto load = [&](const std::string& file, void* out) {
+    const std::string bytes = read_file(file);
+    if (bytes.size() != pixels * 4)
+      fail(file, std::to_string(bytes.size()) + " bytes where a " + std::to_string(width) + " × " + std::to_string(height) +
+                     " image has " + std::to_string(pixels * 4) + "; rerun web/test/walk.mjs");
+    std::memcpy(out, bytes.data(), bytes.size());
+  };
+  std::vector<CapturedFrame> frames;
+  for (const auto& index : j.value("frames", nlohmann::json::array())) {
+    if (!index.is_number_integer()) fail(manifest, "a frame index that is not an integer");
+    CapturedFrame c;
+    c.frame = index.get<int>();
+    c.color = {width, height, std::vector<uint8_t>(pixels * 4)};
+    c.ids = {width, height, std::vector<uint32_t>(pixels)};
+    const std::string stem = folder + "/frame" + std::to_string(c.frame);
+    load(stem + ".rgba", c.color.rgba.data());
+    load(stem + ".ids", c.ids.ids.data());
+    frames.push_back(std::move(c));
+  }
+  if (frames.empty()) fail(manifest, "no captured frames; rerun web/test/walk.mjs with --every");
+  return frames;
+}
+
+NamedFidelity compare_captured_run(CompareArgs& args, const World& world, const CameraPath& path) {
+  const std::vector<CapturedFrame> captured = read_captured(args.captured, args.lens.width, args.lens.height);
+  auto truth = make_strategy("ground-truth", world, {});
+  RenderSettings settings = args.lens.render_settings();
+  fit_backdrop(settings, world.info().bounds);
+  Renderer renderer(settings);
+  use_world_textures(renderer, world);
+  CompareOptions options = args.options;
+  options.image_dir = options.max_images > 0 ? args.out : "";
+  options.label = "captured";
+  Progress progress("compare captured", captured.size());
+  const auto frames = compare_captured(path, args.lens.lens(), captured, *truth, renderer, options,
+                                       [&](size_t done, size_t) { progress.update(done); });
+  progress.finish();
+  const FidelitySummary summary = summarize(frames);
+  write_fidelity_csv(frames, args.out + "/captured-fidelity.csv");
+  write_file_atomically(args.out + "/captured-fidelity.json", labelled_json("captured", summary).dump(2) + "\n");
+  return {"captured", summary};
+}
+
 std::string comparison_table(const std::vector<NamedFidelity>& runs) {
   bench::Table rows;
   for (const auto& [name, s] : runs)
@@ -104,6 +170,9 @@ void register_compare(CLI::App& root) {
   args->add_to(*cmd, "out/compare");
   cmd->add_option("--every", args->options.every, "Compare every k-th frame")->capture_default_str()->check(integer_in(1, 10000000));
   cmd->add_option("--images", args->options.max_images, "Write truth/test/difference PNGs of this many frames")->capture_default_str()->check(integer_in(0, 100000));
+  cmd->add_option("--captured", args->captured,
+                  "Compare frames drawn elsewhere instead of a strategy's: a folder from web/test/walk.mjs (the browser "
+                  "client), at its image size");
   cmd->callback([args] {
     args->check_strategies();
     World world(args->world, args->world_options());
@@ -113,8 +182,11 @@ void register_compare(CLI::App& root) {
     const RunBudget budget = args->run_budget(path.frames.size());
     std::vector<std::string> labels;
     std::vector<NamedFidelity> runs;
-    for (const std::string& given : args->strategies)
-      runs.push_back(compare_one(*args, world, path, budget, given, labels));
+    if (!args->captured.empty())
+      runs.push_back(compare_captured_run(*args, world, path));
+    else
+      for (const std::string& given : args->strategies)
+        runs.push_back(compare_one(*args, world, path, budget, given, labels));
     if (args->json) {
       nlohmann::ordered_json all = nlohmann::ordered_json::array();
       for (const auto& run : runs) all.push_back(labelled_json(run.strategy, run.summary));

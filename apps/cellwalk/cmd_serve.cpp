@@ -6,11 +6,14 @@
 
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <thread>
 #include <nlohmann/json.hpp>
 
+#include "cellwalk/core/error.hpp"
+#include "cellwalk/scene/generators.hpp"
 #include "cellwalk/store/world.hpp"
 #include "cellwalk/systems/pvs_stream/pvs_server.hpp"
 #include "cellwalk/systems/vdr/vdr_server.hpp"
@@ -38,11 +41,25 @@ std::thread stop_on_signal_or_deadline(std::function<void()> stop, double second
   });
 }
 
+// The page and the npm packages it imports must be there, or a browser gets a blank page.
+void check_web_client(const std::string& root) {
+  namespace fs = std::filesystem;
+  if (!fs::is_regular_file(fs::path(root) / "index.html"))
+    throw Error(root + ": no browser client here (no index.html); pass --web-root with cellwalk's web/ folder");
+  for (const char* package : {"three", "meshoptimizer"})
+    if (!fs::is_directory(fs::path(root) / "node_modules" / package))
+      throw Error(root + ": the browser client's npm package " + package + " is missing; run `npm ci` in " + root +
+                  " (scripts/setup does)");
+}
+
 bool is_vdr_model(const std::string& path) { return path.size() > 6 && path.ends_with(".cwvdr"); }
 
 struct ServeArgs {
   std::string input;
   uint16_t port = 0;
+  bool web = false;
+  uint16_t web_port = 0;
+  std::string web_root;
   net::LinkShape link;
   double seconds = 0, idle_s = 600;
   uint32_t max_sessions = 256;
@@ -105,28 +122,47 @@ void register_serve(CLI::App& root) {
       ->capture_default_str()->check(integer_in(1, 1'000'000));
   cmd->add_option("--idle-s", a->idle_s, "VDR: drop a session that sends nothing for this long (0: never)")
       ->capture_default_str()->check(number_in(0, 1e6));
+  cmd->add_flag("--web", a->web, "Also serve the browser client: a page and WebSockets on one HTTP port (docs/web.md)");
+  cmd->add_option("--web-port", a->web_port, "HTTP port of --web on 127.0.0.1 (0: a free one, printed)")
+      ->capture_default_str()->check(integer_in(0, 65535));
+  cmd->add_option("--web-root", a->web_root, "The browser client's folder (default: $CELLWALK_WEB, else the source tree's web/)");
   cmd->add_flag("--quiet", a->quiet, "Do not log sessions");
   cmd->add_flag("--json", a->json, "Print the summary as JSON when stopped");
   cmd->callback([a] {
-    if (is_vdr_model(a->input)) return serve_vdr(*a);
+    if (is_vdr_model(a->input)) {
+      if (a->web) throw Error("--web serves worlds with visible sets, not VDR models: serve a .cww built with `cellwalk pvs --cells grid:S`");
+      return serve_vdr(*a);
+    }
     const World world(a->input);
     pvs_stream::PvsServerOptions options;
     options.port = a->port;
     options.link = a->link;
     options.log = session_log(*a);
+    if (a->web) {
+      options.web = true;
+      options.web_port = a->web_port;
+      options.web_root = a->web_root.empty() ? web_client_dir() : a->web_root;
+      check_web_client(options.web_root);
+    }
     pvs_stream::PvsServer server(world, options);
     const pvs_stream::Welcome grid = pvs_stream::grid_of(world);
     std::printf("serving %s (%zu objects, %u × %u cells) on 127.0.0.1:%u\n", a->input.c_str(), world.object_count(),
                 grid.rows, grid.cols, unsigned(server.port()));
+    if (a->web) std::printf("browser client at http://127.0.0.1:%u/\n", unsigned(server.web_port()));
     std::fflush(stdout);
     std::thread stopper = stop_on_signal_or_deadline([&server] { server.stop(); }, a->seconds);
     server.run();
     stopper.join();
     const pvs_stream::PvsServerStats s = server.stats();
     if (a->json) {
-      const nlohmann::ordered_json j = {{"port", server.port()},           {"sessions", s.sessions_opened},
-                                        {"dropped", s.sessions_dropped},   {"fetches", s.fetches},
-                                        {"objects_sent", s.objects_sent},  {"bytes_sent", s.bytes_sent}};
+      nlohmann::ordered_json j = {{"port", server.port()},           {"sessions", s.sessions_opened},
+                                  {"dropped", s.sessions_dropped},   {"fetches", s.fetches},
+                                  {"objects_sent", s.objects_sent},  {"bytes_sent", s.bytes_sent}};
+      if (a->web)
+        j["web"] = {{"port", server.web_port()},
+                    {"sessions", s.web_sessions},
+                    {"files_served", s.web_files_served},
+                    {"requests_refused", s.web_requests_refused}};
       print_json("serve", j);
       return;
     }

@@ -117,6 +117,40 @@ std::vector<FidelityFrame> compare(const CameraPath& path, const Camera& lens, S
   return std::move(compare_side_by_side(path, lens, one, truth, renderer, options, progress).front());
 }
 
+std::vector<FidelityFrame> compare_captured(const CameraPath& path, const Camera& lens, std::span<const CapturedFrame> captured,
+                                            Strategy& truth, Renderer& renderer, const CompareOptions& options,
+                                            const ProgressFn& progress) {
+  std::vector<FidelityFrame> frames;
+  Camera camera = lens;
+  int images = 0;
+  for (const CapturedFrame& c : captured) {
+    const std::string name = "captured frame " + std::to_string(c.frame);
+    if (c.frame < 0 || size_t(c.frame) >= path.frames.size())
+      fail(name, "the path has " + std::to_string(path.frames.size()) + " frames; capture the same path");
+    const RenderSettings& s = renderer.settings();
+    if (c.color.width != s.width || c.color.height != s.height || c.ids.width != s.width || c.ids.height != s.height)
+      fail(name, "its images are " + std::to_string(c.color.width) + " × " + std::to_string(c.color.height) + ", not " +
+                     std::to_string(s.width) + " × " + std::to_string(s.height));
+    apply(path.frames[size_t(c.frame)], camera);
+    render_frame(truth, renderer, camera);
+    const Image truth_color = renderer.read_color();
+    Image diff;
+    FidelityFrame f = compare_images(truth_color, renderer.read_ids(), c.color, c.ids, &diff);
+    f.frame = c.frame;
+    frames.push_back(std::move(f));
+    if (!options.image_dir.empty() && images < options.max_images) {
+      const std::string stem = options.image_dir + "/frame" + std::to_string(c.frame);
+      const std::string label = options.label.empty() ? "captured" : options.label;
+      write_png(truth_color, stem + "-truth.png");
+      write_png(c.color, stem + "-" + label + ".png");
+      write_png(diff, stem + "-" + label + "-diff.png");
+      ++images;
+    }
+    if (progress) progress(frames.size(), captured.size());
+  }
+  return frames;
+}
+
 FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
   FidelitySummary s;
   s.frames = frames.size();
@@ -152,7 +186,7 @@ FidelitySummary summarize(const std::vector<FidelityFrame>& frames) {
 
 void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::string& file) {
   std::ostringstream out;
-  out << "frame,differing_fraction,psnr_db,visible_objects,missed_objects,"
+  out << "frame,differing_fraction,psnr_db,visible_objects,missed_objects,missed_drawn,largest_missed_pixels,"
          "test_to_truth_max_px,test_to_truth_p999_px,test_to_truth_unmatched,"
          "truth_to_test_max_px,truth_to_test_p999_px,truth_to_test_unmatched,"
          "worst_x,worst_y,missed_object_ids\n";

@@ -1,9 +1,10 @@
-// Framed, shaped TCP connections (docs/protocol.md, "Frames" and "Links").
+// Framed, shaped connections over TCP (docs/protocol.md, "Frames" and "Links").
 #include "cellwalk/net/connection.hpp"
 
 #include <algorithm>
 
 #include "cellwalk/core/error.hpp"
+#include "net/message_stream.hpp"
 
 namespace cellwalk::net {
 
@@ -17,56 +18,106 @@ Clock::time_point LinkShaper::arrival(size_t bytes, Clock::time_point now) {
   return busy_until_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double, std::milli>(shape_.latency_ms));
 }
 
-Connection::Connection(tcp::socket socket, LinkShape outgoing, ConnectionLimits limits)
-    : socket_(std::move(socket)),
-      send_timer_(socket_.get_executor()),
-      stall_timer_(socket_.get_executor()),
-      shaper_(outgoing),
-      limits_(limits) {
-  boost::system::error_code ec;
-  socket_.set_option(tcp::no_delay(true), ec);  // small requests go at once
+// ---- Frames over a TCP byte stream ---------------------------------------------------------
+
+namespace {
+
+class TcpMessageStream final : public MessageStream {
+ public:
+  explicit TcpMessageStream(tcp::socket socket) : socket_(std::move(socket)), stall_timer_(socket_.get_executor()) {
+    boost::system::error_code ec;
+    socket_.set_option(tcp::no_delay(true), ec);  // small requests go at once
+  }
+  asio::any_io_executor executor() override { return socket_.get_executor(); }
+
+  void read(uint32_t max_payload, std::chrono::milliseconds stall, ReadHandler handler) override {
+    asio::async_read(socket_, asio::buffer(header_), [this, max_payload, stall, handler = std::move(handler)](
+                                                         boost::system::error_code ec, size_t) mutable {
+      if (ec) return handler({ec == asio::error::eof ? "the peer closed the connection" : "read failed: " + ec.message()});
+      FrameHeader h;
+      try {
+        h = parse_frame_header(header_, max_payload);
+      } catch (const ProtocolError& e) {
+        return handler({e.what()});
+      }
+      read_payload(h, stall, std::move(handler));
+    });
+  }
+
+  void write(std::span<const uint8_t> frame, WriteHandler handler) override {
+    asio::async_write(socket_, asio::buffer(frame.data(), frame.size()), std::move(handler));
+  }
+
+  void close() override {
+    boost::system::error_code ec;
+    stall_timer_.cancel();
+    socket_.shutdown(tcp::socket::shutdown_both, ec);
+    socket_.close(ec);
+  }
+
+ private:
+  void read_payload(FrameHeader header, std::chrono::milliseconds stall, ReadHandler handler) {
+    payload_.assign(header.length, 0);
+    // A peer that sends a header and then stalls is dropped: the session holds a buffer for it.
+    stall_timer_.expires_after(stall);
+    stall_timer_.async_wait([this](boost::system::error_code ec) {
+      if (!ec) {
+        stalled_ = true;
+        boost::system::error_code ignored;
+        socket_.cancel(ignored);
+      }
+    });
+    asio::async_read(socket_, asio::buffer(payload_), [this, header, handler = std::move(handler)](
+                                                          boost::system::error_code ec, size_t) {
+      stall_timer_.cancel();
+      if (stalled_) return handler({"stalled in the middle of a message"});
+      if (ec)
+        return handler({ec == asio::error::eof ? "the peer closed the connection mid-message" : "read failed: " + ec.message()});
+      handler({std::nullopt, header, std::move(payload_), kFrameHeaderBytes + header.length});
+    });
+  }
+
+  tcp::socket socket_;
+  asio::steady_timer stall_timer_;
+  std::array<uint8_t, kFrameHeaderBytes> header_{};
+  std::vector<uint8_t> payload_;
+  bool stalled_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<MessageStream> tcp_message_stream(tcp::socket socket) {
+  return std::make_unique<TcpMessageStream>(std::move(socket));
 }
+
+// ---- The connection ----------------------------------------------------------------------
+
+Connection::Connection(tcp::socket socket, LinkShape outgoing, ConnectionLimits limits)
+    : Connection(tcp_message_stream(std::move(socket)), outgoing, limits) {}
+
+Connection::Connection(std::unique_ptr<MessageStream> stream, LinkShape outgoing, ConnectionLimits limits)
+    : stream_(std::move(stream)), send_timer_(stream_->executor()), shaper_(outgoing), limits_(limits) {}
+
+Connection::~Connection() = default;
 
 void Connection::start(OnMessage on_message, OnClose on_close) {
   on_message_ = std::move(on_message);
   on_close_ = std::move(on_close);
   open_ = true;
-  read_header();
+  read_next();
 }
 
-void Connection::read_header() {
-  asio::async_read(socket_, asio::buffer(header_), [self = shared_from_this()](boost::system::error_code ec, size_t n) {
+void Connection::read_next() {
+  stream_->read(limits_.max_payload, limits_.stall, [self = shared_from_this()](MessageStream::Read r) {
     if (!self->open_) return;
-    if (ec) return self->close(ec == asio::error::eof ? "the peer closed the connection" : "read failed: " + ec.message());
-    self->bytes_received_ += n;
-    FrameHeader h;
+    if (r.closed) return self->close(*r.closed);
+    self->bytes_received_ += r.wire_bytes;
     try {
-      h = parse_frame_header(self->header_, self->limits_.max_payload);
-    } catch (const ProtocolError& e) {
-      return self->close(e.what());
-    }
-    self->read_payload(h);
-  });
-}
-
-void Connection::read_payload(FrameHeader header) {
-  payload_.assign(header.length, 0);
-  // A peer that sends a header and then stalls is dropped: the session holds a buffer for it.
-  stall_timer_.expires_after(limits_.stall);
-  stall_timer_.async_wait([self = shared_from_this()](boost::system::error_code ec) {
-    if (!ec && self->open_) self->close("stalled in the middle of a message");
-  });
-  asio::async_read(socket_, asio::buffer(payload_), [self = shared_from_this(), header](boost::system::error_code ec, size_t n) {
-    self->stall_timer_.cancel();
-    if (!self->open_) return;
-    if (ec) return self->close(ec == asio::error::eof ? "the peer closed the connection mid-message" : "read failed: " + ec.message());
-    self->bytes_received_ += n;
-    try {
-      self->on_message_(header.type, std::move(self->payload_));
+      self->on_message_(r.header.type, std::move(r.payload));
     } catch (const std::exception& e) {
       return self->close(e.what());
     }
-    if (self->open_ && !self->closing_) self->read_header();
+    if (self->open_ && !self->closing_) self->read_next();
   });
 }
 
@@ -90,15 +141,14 @@ void Connection::write_next() {
   send_timer_.expires_at(queue_.front().due);
   send_timer_.async_wait([self = shared_from_this()](boost::system::error_code ec) {
     if (ec || !self->open_) return;
-    asio::async_write(self->socket_, asio::buffer(self->queue_.front().frame),
-                      [self](boost::system::error_code wec, size_t n) {
-                        if (!self->open_) return;
-                        if (wec) return self->close("write failed: " + wec.message());
-                        self->bytes_sent_ += n;
-                        self->queued_bytes_ -= self->queue_.front().frame.size();
-                        self->queue_.pop_front();
-                        self->write_next();
-                      });
+    self->stream_->write(self->queue_.front().frame, [self](boost::system::error_code wec, size_t n) {
+      if (!self->open_) return;
+      if (wec) return self->close("write failed: " + wec.message());
+      self->bytes_sent_ += n;
+      self->queued_bytes_ -= self->queue_.front().frame.size();
+      self->queue_.pop_front();
+      self->write_next();
+    });
   });
 }
 
@@ -112,11 +162,8 @@ void Connection::close_after_sending(const std::string& reason) {
 void Connection::close(const std::string& reason) {
   if (!open_) return;
   open_ = false;
-  boost::system::error_code ec;
   send_timer_.cancel();
-  stall_timer_.cancel();
-  socket_.shutdown(tcp::socket::shutdown_both, ec);
-  socket_.close(ec);
+  stream_->close();
   queue_.clear();
   queued_bytes_ = 0;
   if (on_close_) on_close_(reason);

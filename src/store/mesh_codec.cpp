@@ -323,4 +323,19 @@ Mesh decode_mesh(std::span<const uint8_t> bytes, std::string_view where,
   return mesh;
 }
 
+std::vector<uint8_t> without_zstd(std::span<const uint8_t> bytes, std::string_view where,
+                                  const DecodeLimits& limits) {
+  ByteReader r(bytes, std::string(where));
+  const Header h = read_header(r);
+  if (!(h.flags & kZstd)) return {bytes.begin(), bytes.end()};
+  if (mesh_bytes(h) > limits.max_mesh_bytes) r.error("mesh larger than the decode limit");
+  const size_t header_bytes = bytes.size() - r.remaining();
+  const std::vector<uint8_t> raw = zstd_body(r, h);
+  std::vector<uint8_t> out(bytes.begin(), bytes.begin() + ptrdiff_t(header_bytes));
+  constexpr size_t kFlagsOffset = kMagic.size() + 1;  // after the magic and the version
+  out[kFlagsOffset] = uint8_t(out[kFlagsOffset] & ~kZstd);
+  out.insert(out.end(), raw.begin(), raw.end());
+  return out;
+}
+
 }  // namespace cellwalk

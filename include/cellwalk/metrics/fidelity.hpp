@@ -87,6 +87,17 @@ std::vector<std::vector<FidelityFrame>> compare_side_by_side(const CameraPath& p
                                                          std::span<Strategy* const> strategies, Strategy& truth,
                                                          Renderer& renderer, const CompareOptions& options,
                                                          const ProgressFn& progress = {});
+// Frames drawn elsewhere (the browser client, web/test/walk.mjs), each against the truth rendered
+// here for the same path frame: images of the renderer's size, rows bottom-up.
+struct CapturedFrame {
+  int frame = 0;  // index into the path
+  Image color;
+  IdImage ids;
+};
+// Throws Error naming the frame when one lies outside the path or is not the renderer's size.
+std::vector<FidelityFrame> compare_captured(const CameraPath& path, const Camera& lens, std::span<const CapturedFrame> captured,
+                                            Strategy& truth, Renderer& renderer, const CompareOptions& options,
+                                            const ProgressFn& progress = {});
 FidelitySummary summarize(const std::vector<FidelityFrame>& frames);
 void write_fidelity_csv(const std::vector<FidelityFrame>& frames, const std::string& file);
 std::string to_json(const FidelitySummary& summary);

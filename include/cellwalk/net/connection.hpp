@@ -1,7 +1,7 @@
-// Framed TCP connections for cellwalk's servers and clients (Boost.Asio), with the link shaped
-// per direction: a one-way delay and a rate, so that loopback sockets carry real delays
-// (docs/protocol.md, "Links"). Everything here runs on one single-threaded io_context: a
-// server is one thread, however many sessions it holds.
+// Framed connections for cellwalk's servers and clients (Boost.Asio), over TCP or a WebSocket,
+// with the link shaped per direction: a one-way delay and a rate, so that loopback sockets carry
+// real delays (docs/protocol.md, "Links"). Everything here runs on one single-threaded
+// io_context: a server is one thread, however many sessions it holds.
 #pragma once
 
 // Boost 1.74's Asio uses std::exchange without including <utility>.
@@ -46,6 +46,8 @@ struct ConnectionLimits {
   std::chrono::milliseconds stall{10000};             // to finish a message once its header came
 };
 
+class MessageStream;  // how the frames travel (src/net/message_stream.hpp)
+
 // A framed connection. Owned through shared_ptr: its pending operations keep it alive.
 // REQUIRES: used only from its io_context's thread.
 class Connection : public std::enable_shared_from_this<Connection> {
@@ -55,6 +57,9 @@ class Connection : public std::enable_shared_from_this<Connection> {
   using OnClose = std::function<void(const std::string& reason)>;
 
   Connection(boost::asio::ip::tcp::socket socket, LinkShape outgoing, ConnectionLimits limits);
+  // Any stream of frames (a WebSocket from WebListener).
+  Connection(std::unique_ptr<MessageStream> stream, LinkShape outgoing, ConnectionLimits limits);
+  ~Connection();
   void start(OnMessage on_message, OnClose on_close);
   // Queues one message; it is written when the shaped link delivers it. Closes the connection
   // when the peer lets more than max_queued_bytes pile up.
@@ -74,18 +79,15 @@ class Connection : public std::enable_shared_from_this<Connection> {
     std::vector<uint8_t> frame;
     Clock::time_point due;
   };
-  void read_header();
-  void read_payload(FrameHeader header);
+  void read_next();
   void write_next();
 
-  boost::asio::ip::tcp::socket socket_;
-  boost::asio::steady_timer send_timer_, stall_timer_;
+  std::unique_ptr<MessageStream> stream_;
+  boost::asio::steady_timer send_timer_;
   LinkShaper shaper_;
   ConnectionLimits limits_;
   OnMessage on_message_;
   OnClose on_close_;
-  std::array<uint8_t, kFrameHeaderBytes> header_{};
-  std::vector<uint8_t> payload_;
   std::deque<Outgoing> queue_;
   bool writing_ = false, open_ = false, closing_ = false;
   std::string closing_reason_;

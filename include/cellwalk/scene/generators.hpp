@@ -82,4 +82,8 @@ std::vector<CarvedFace> carved_faces(const std::vector<Aabb>& spaces, double til
 // Where the project keeps the meshes scripts/setup unpacks (data/cgal/meshes/...).
 std::string data_path(const std::string& relative);
 
+// The browser client's folder (web/, its npm packages installed by scripts/setup):
+// $CELLWALK_WEB when set, else the source tree's web/ this library was built from.
+std::string web_client_dir();
+
 }  // namespace cellwalk

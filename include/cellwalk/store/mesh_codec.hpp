@@ -43,4 +43,10 @@ std::vector<uint8_t> encode_mesh(const Mesh& mesh, const CodecParams& params = {
 Mesh decode_mesh(std::span<const uint8_t> bytes, std::string_view where,
                  const DecodeLimits& limits = {});
 
+// The same mesh as encode_mesh writes it without zstd: the zstd layer removed, every other byte
+// as it was (a browser decodes meshoptimizer's codecs but has no zstd). Bytes without the zstd
+// flag come back unchanged. Throws Error as decode_mesh does for a damaged header or frame.
+std::vector<uint8_t> without_zstd(std::span<const uint8_t> bytes, std::string_view where,
+                                  const DecodeLimits& limits = {});
+
 }  // namespace cellwalk

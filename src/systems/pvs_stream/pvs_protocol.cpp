@@ -8,6 +8,9 @@
 #include "net/message_parse.hpp"
 
 namespace cellwalk::pvs_stream {
+
+static_assert(sizeof(CatalogEntry) == 28, "a catalog entry is 28 bytes on the wire (docs/protocol.md)");
+
 namespace {
 
 using net::ProtocolError;
@@ -172,6 +175,27 @@ DoneReply parse_done(std::span<const uint8_t> payload) {
     d.objects = r.get<uint32_t>("objects");
     expect_end(r, "done");
     return d;
+  });
+}
+
+void parse_catalog_request(std::span<const uint8_t> payload) {
+  if (!payload.empty()) throw ProtocolError("a catalog request with " + std::to_string(payload.size()) + " bytes; it is empty");
+}
+
+std::vector<uint8_t> encode_catalog(const Catalog& c) {
+  ByteWriter w;
+  w.put(uint32_t(c.objects.size()));
+  w.put_array(std::span<const CatalogEntry>(c.objects));
+  return std::move(w.bytes());
+}
+
+Catalog parse_catalog(std::span<const uint8_t> payload) {
+  return parsing("catalog", [&] {
+    ByteReader r(payload, "catalog");
+    Catalog c;
+    c.objects = r.get_array<CatalogEntry>(r.get<uint32_t>("object count"), "objects");
+    expect_end(r, "catalog");
+    return c;
   });
 }
 

@@ -7,9 +7,12 @@
 #include <filesystem>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <thread>
 
 #include "cellwalk/core/error.hpp"
+#include "cellwalk/net/web_listener.hpp"
+#include "cellwalk/store/mesh_codec.hpp"
 #include "cellwalk/store/page_file.hpp"
 #include "cellwalk/visibility/stored_pvs.hpp"
 
@@ -52,6 +55,18 @@ Welcome grid_of(const World& world) {
   return w;
 }
 
+Catalog catalog_of(const World& world) {
+  Catalog c;
+  c.objects.resize(world.object_count());
+  for (size_t id = 0; id < c.objects.size(); ++id) {
+    const auto& o = world.object(uint32_t(id));
+    c.objects[id].color = o.color;
+    std::copy_n(&o.bounds.min.x, 3, c.objects[id].box);
+    std::copy_n(&o.bounds.max.x, 3, c.objects[id].box + 3);
+  }
+  return c;
+}
+
 PlannedReply plan_reply(const visibility::StoredPvs& pvs, std::vector<uint8_t>& held, const FetchRequest& f) {
   for (uint32_t id : f.dropped) held[id] = 0;
   PlannedReply out{{f.sequence, {}}, {}};
@@ -82,40 +97,49 @@ struct PvsServer::Impl {
     std::shared_ptr<net::Connection> connection;
     std::vector<uint8_t> held;  // the server's mirror of the client's objects
     bool greeted = false;
+    bool web = false;  // a browser: levels go without zstd
   };
 
   const World& world;
   visibility::StoredPvs pvs;
   Welcome welcome;
+  std::vector<uint8_t> catalog;  // encoded once, sent to whoever asks
   PvsServerOptions options;
   asio::io_context io;
   net::Listener listener;
+  std::optional<net::WebListener> web;
   std::map<uint64_t, std::shared_ptr<Session>> sessions;
   uint64_t next_id = 1;
   mutable std::mutex stats_mutex;
   PvsServerStats stats;
 
   Impl(const World& w, PvsServerOptions o)
-      : world(w), pvs(w), welcome(grid_of(w)), options(std::move(o)), listener(io, options.port) {
+      : world(w), pvs(w), welcome(grid_of(w)), catalog(encode_catalog(catalog_of(w))), options(std::move(o)),
+        listener(io, options.port) {
     std::error_code ec;
     welcome.world_bytes = std::filesystem::file_size(world.file().path(), ec);
+    if (options.web)
+      web.emplace(io, net::WebListenerOptions{options.web_port, "127.0.0.1", options.web_root, options.link,
+                                              options.limits, size_t(64) << 20, options.log});
   }
 
   void log(const std::string& line) const {
     if (options.log) options.log(line);
   }
 
-  void open(tcp::socket socket) {
+  void open(std::shared_ptr<net::Connection> connection, bool from_web) {
     auto s = std::make_shared<Session>();
     s->id = next_id++;
-    s->connection = std::make_shared<net::Connection>(std::move(socket), options.link, options.limits);
+    s->connection = std::move(connection);
+    s->web = from_web;
     s->held.assign(world.object_count(), 0);
     sessions[s->id] = s;
     {
       const std::lock_guard lock(stats_mutex);
       ++stats.sessions_opened;
+      if (from_web) ++stats.web_sessions;
     }
-    log("session " + std::to_string(s->id) + " opened");
+    log("session " + std::to_string(s->id) + (from_web ? " opened (WebSocket)" : " opened"));
     std::weak_ptr<Session> weak = s;
     s->connection->start(
         [this, weak](uint8_t type, std::vector<uint8_t> payload) {
@@ -148,6 +172,11 @@ struct PvsServer::Impl {
         s.connection->send(uint8_t(PvsMessage::welcome), encode_welcome(welcome));
         return;
       }
+      if (type == uint8_t(PvsMessage::catalog_request)) {
+        parse_catalog_request(payload);
+        s.connection->send(uint8_t(PvsMessage::catalog), catalog);
+        return;
+      }
       if (type != uint8_t(PvsMessage::fetch)) throw net::ProtocolError("unexpected message type " + std::to_string(type));
       fetch(s, parse_fetch(payload, welcome.cell_count, welcome.objects));
     } catch (const std::exception& e) {
@@ -162,7 +191,9 @@ struct PvsServer::Impl {
     s.connection->send(uint8_t(PvsMessage::rows), encode_rows(plan.rows));
     for (uint32_t id : plan.send) {
       const uint32_t level = std::min(f.level, world.object(id).lod_count - 1);
-      s.connection->send(uint8_t(PvsMessage::object), encode_object({f.sequence, id, level, world.read_level(id, level)}));
+      std::vector<uint8_t> bytes = world.read_level(id, level);
+      if (s.web) bytes = without_zstd(bytes, world.file().path() + ": object " + std::to_string(id));
+      s.connection->send(uint8_t(PvsMessage::object), encode_object({f.sequence, id, level, std::move(bytes)}));
     }
     const uint32_t sent = uint32_t(plan.send.size());
     s.connection->send(uint8_t(PvsMessage::done), encode_done({f.sequence, sent}));
@@ -177,18 +208,35 @@ struct PvsServer::Impl {
 
 PvsServer::PvsServer(const World& world, PvsServerOptions options)
     : impl_(std::make_unique<Impl>(world, std::move(options))) {
-  impl_->listener.accept([this](tcp::socket socket) { impl_->open(std::move(socket)); });
+  Impl& impl = *impl_;
+  impl.listener.accept([&impl](tcp::socket socket) {
+    impl.open(std::make_shared<net::Connection>(std::move(socket), impl.options.link, impl.options.limits), false);
+  });
+  if (impl.web) impl.web->accept([&impl](std::shared_ptr<net::Connection> c) { impl.open(std::move(c), true); });
 }
 
 PvsServer::~PvsServer() = default;
 
 uint16_t PvsServer::port() const { return impl_->listener.port(); }
 
-void PvsServer::run() { impl_->io.run(); }
+uint16_t PvsServer::web_port() const {
+  if (!impl_->web) throw Error("this PVS server serves no browsers (PvsServerOptions::web)");
+  return impl_->web->port();
+}
+
+void PvsServer::run() {
+  impl_->io.run();
+  if (!impl_->web) return;
+  const net::WebListenerStats& w = impl_->web->stats();
+  const std::lock_guard lock(impl_->stats_mutex);
+  impl_->stats.web_files_served = w.files_served;
+  impl_->stats.web_requests_refused = w.refused;
+}
 
 void PvsServer::stop() {
   asio::post(impl_->io, [this] {
     impl_->listener.close();
+    if (impl_->web) impl_->web->close();
     std::vector<std::shared_ptr<net::Connection>> open;
     for (auto& [id, s] : impl_->sessions) open.push_back(s->connection);
     for (auto& c : open) c->close("the server stopped");

@@ -10,7 +10,9 @@
 
 namespace cellwalk::pvs_stream {
 
-enum class PvsMessage : uint8_t { hello = 1, welcome = 2, fetch = 3, rows = 4, object = 5, done = 6, error = 7 };
+enum class PvsMessage : uint8_t {
+  hello = 1, welcome = 2, fetch = 3, rows = 4, object = 5, done = 6, error = 7, catalog_request = 8, catalog = 9
+};
 constexpr uint32_t kPvsProtocolVersion = 1;
 constexpr uint32_t kNoCell = 0xFFFFFFFFu;
 constexpr uint32_t kMaxCellsPerFetch = 64;
@@ -48,6 +50,17 @@ struct DoneReply {
   uint32_t sequence = 0, objects = 0;
 };
 
+// Server → client, when asked (catalog_request, an empty message, any time after the hello):
+// what a client that has no world file needs to draw and cull an object before and after its
+// geometry comes (the browser client). objects[id] for every id of the world.
+struct CatalogEntry {
+  uint32_t color = 0;     // RGBA8, r in the low byte: used where the mesh has no vertex colours
+  float box[6] = {};      // min x y z, max x y z
+};
+struct Catalog {
+  std::vector<CatalogEntry> objects;
+};
+
 std::vector<uint8_t> encode_hello();
 void parse_hello(std::span<const uint8_t> payload);  // throws for another version
 std::vector<uint8_t> encode_welcome(const Welcome& w);
@@ -61,6 +74,9 @@ std::vector<uint8_t> encode_object(const ObjectReply& o);
 ObjectReply parse_object(std::span<const uint8_t> payload);
 std::vector<uint8_t> encode_done(const DoneReply& d);
 DoneReply parse_done(std::span<const uint8_t> payload);
+void parse_catalog_request(std::span<const uint8_t> payload);  // throws unless empty
+std::vector<uint8_t> encode_catalog(const Catalog& c);
+Catalog parse_catalog(std::span<const uint8_t> payload);
 std::vector<uint8_t> encode_error(const std::string& reason);
 std::string parse_error(std::span<const uint8_t> payload);
 

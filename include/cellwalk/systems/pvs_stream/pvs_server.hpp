@@ -1,6 +1,6 @@
 // The PVS streaming server and a blocking client (seed 004, §7.3–7.4 made real over TCP;
 // docs/protocol.md, "PVS streaming"). The server holds one world with visible sets over a 2D
-// grid of view cells and answers, per session, fetches of rows and of the geometry the client
+// grid of view cells (over TCP, and over WebSockets to browsers) and answers, per session, fetches of rows and of the geometry the client
 // lacks: it mirrors which objects each client holds (the client names what it dropped), so a
 // fetch is one round trip and sends ΔS = S_J − S_I only. One thread, many sessions; a session
 // that breaks the protocol, stalls or lets its replies pile up is dropped alone, with a reason.
@@ -25,6 +25,11 @@ struct PvsServerOptions {
   net::LinkShape link;      // the server → client direction
   net::ConnectionLimits limits{1u << 20, size_t(256) << 20, std::chrono::milliseconds(10000)};
   std::function<void(const std::string&)> log;  // one line per session event; none: silent
+  // The browser client (docs/web.md): one more port, HTTP, serving the folder `web_root` and
+  // the same protocol over WebSockets on /ws. Its sessions get levels without zstd.
+  bool web = false;
+  uint16_t web_port = 0;  // 0: a free port
+  std::string web_root;   // empty: /ws only
 };
 
 struct PvsServerStats {
@@ -32,11 +37,15 @@ struct PvsServerStats {
   // What the sessions held at the most: each one's mirror of its client's objects and its
   // replies not yet written (the world and its sets are shared and counted apart).
   uint64_t peak_session_bytes = 0;
+  uint64_t web_sessions = 0;
+  uint64_t web_files_served = 0, web_requests_refused = 0;  // set when run() returns
 };
 
 // The grid a world's stored sets lie on, as a Welcome (without world_bytes). Throws Error when
 // the world has no sets or they are not over a 2D grid.
 Welcome grid_of(const World& world);
+// Every object's colour and box, for the catalog message.
+Catalog catalog_of(const World& world);
 
 class PvsServer {
  public:
@@ -44,6 +53,7 @@ class PvsServer {
   PvsServer(const World& world, PvsServerOptions options);
   ~PvsServer();
   uint16_t port() const;
+  uint16_t web_port() const;  // REQUIRES: options.web
   // Serves on the calling thread until stop().
   void run();
   // Thread-safe.
