@@ -74,7 +74,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (ec) std::abort();
   const timeval timeout{2, 0};  // a server that neither answers nor closes is a hang
   setsockopt(socket.native_handle(), SOL_SOCKET, SO_RCVTIMEO, &timeout, sizeof timeout);
-  asio::write(socket, asio::buffer(input), ec);
+  // A browser waits for the answer to its request before it sends WebSocket frames: the input
+  // goes in two parts, up to the end of its first request head, then (after the server's answer
+  // head) the rest.
+  const size_t head = input.find("\r\n\r\n");
+  const size_t first = head == std::string::npos ? input.size() : head + 4;
+  asio::write(socket, asio::buffer(input.data(), first), ec);
+  if (first < input.size()) {
+    asio::streambuf answer(1 << 16);
+    asio::read_until(socket, answer, "\r\n\r\n", ec);
+    asio::write(socket, asio::buffer(input.data() + first, input.size() - first), ec);
+  }
   socket.shutdown(tcp::socket::shutdown_send, ec);
   char sink[4096];
   for (;;) {

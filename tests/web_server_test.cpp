@@ -33,10 +33,13 @@ using tcp = asio::ip::tcp;
 // A blocking WebSocket peer: what a browser's page does, frame by frame.
 class WsPeer {
  public:
-  explicit WsPeer(uint16_t port, const std::string& target = "/ws") : ws_(io_) {
+  // `origin`: the page that opens it, as a browser names it ("": none, as a tool sends).
+  explicit WsPeer(uint16_t port, const std::string& target = "/ws", const std::string& origin = "") : ws_(io_) {
     tcp::resolver resolver(io_);
     asio::connect(ws_.next_layer(), resolver.resolve("127.0.0.1", std::to_string(port)));
     ws_.binary(true);
+    if (!origin.empty())
+      ws_.set_option(websocket::stream_base::decorator([origin](websocket::request_type& r) { r.set(http::field::origin, origin); }));
     ws_.handshake("127.0.0.1", target);
   }
   void send(PvsMessage type, const std::vector<uint8_t>& payload) { ws_.write(asio::buffer(net::make_frame(uint8_t(type), payload))); }
@@ -194,12 +197,17 @@ TEST_F(WebServerTest, ServesTheFolderAndNothingOutsideIt) {
   EXPECT_EQ(http_request(port, http::verb::post, "/").first, 405);
   EXPECT_THROW(WsPeer(port, "/elsewhere"), beast::system_error);
   EXPECT_TRUE(logged("web:", "not /ws"));
+  // Only this server's own page may open a WebSocket (beast's client sends Host "127.0.0.1").
+  EXPECT_THROW(WsPeer(port, "/ws", "http://another.example"), beast::system_error);
+  EXPECT_TRUE(logged("web:", "another site"));
+  EXPECT_NO_THROW(WsPeer(port, "/ws", "http://127.0.0.1"));
   EXPECT_EQ(net::web_file_for(root_.path().string(), "/"), (std::filesystem::canonical(root_.path()) / "index.html").string());
   EXPECT_EQ(net::web_file_for(root_.path().string(), "/link.txt"), "");
 }
 
 // Hostile WebSocket peers: another magic, a text message, a frame whose length is not its
-// message's, a message over the limit, a fetch before the hello: each session is dropped with
+// message's, a message over the limit, a fetch before the hello, the catalog asked for again (a
+// peer could make the server queue it without end): each session is dropped with
 // its reason logged, and a page beside them goes on being served.
 TEST_F(WebServerTest, HostileWebSocketSessionsAreDroppedAlone) {
   start();
@@ -214,7 +222,12 @@ TEST_F(WebServerTest, HostileWebSocketSessionsAreDroppedAlone) {
       {"a text message", [](WsPeer& p) { p.send_raw(net::make_frame(uint8_t(PvsMessage::hello), encode_hello()), false); }},
       {"whose frame says", [&](WsPeer& p) { p.send_raw(short_frame); }},
       {"more than the", [](WsPeer& p) { p.send_raw(std::vector<uint8_t>(3u << 20, 0)); }},
-      {"first message must be hello", [](WsPeer& p) { p.send(PvsMessage::fetch, encode_fetch({1, 0, {0}, {}})); }}};
+      {"first message must be hello", [](WsPeer& p) { p.send(PvsMessage::fetch, encode_fetch({1, 0, {0}, {}})); }},
+      {"a second catalog request", [](WsPeer& p) {
+         p.send(PvsMessage::hello, encode_hello());
+         p.send(PvsMessage::catalog_request, {});
+         p.send(PvsMessage::catalog_request, {});
+       }}};
   for (const auto& [reason, act] : cases) {
     WsPeer bad(port);
     act(bad);

@@ -10,12 +10,18 @@ set -euo pipefail
 src=$1
 cw=$2
 command -v node >/dev/null || { echo "SKIP: node is not installed (scripts/setup installs it)"; exit 77; }
+node_major=$(node -p 'process.versions.node.split(".")[0]')
+need=$(node -p "require('$src/web/package.json').engines.node.replace(/[^0-9]/g, '')")
+[ "$node_major" -ge "$need" ] || { echo "SKIP: Node.js $node_major is older than the $need the browser client's tools need"; exit 77; }
 [ -x "${CHROMIUM:-/usr/bin/chromium}" ] || { echo "SKIP: Chromium is not installed (scripts/setup installs Debian's chromium)"; exit 77; }
 [ -d "$src/web/node_modules/playwright-core" ] || { echo "SKIP: web/node_modules is missing (scripts/setup runs npm ci in web/)"; exit 77; }
 
 dir=$(mktemp -d)
 server=""
-cleanup() { [ -n "$server" ] && kill "$server" 2>/dev/null; rm -rf "$dir"; }
+cleanup() {
+  if [ -n "$server" ]; then kill "$server" 2>/dev/null || true; wait "$server" 2>/dev/null || true; fi
+  rm -rf "$dir"
+}
 trap cleanup EXIT
 
 "$cw" generate city --objects 150 --seed 5 -o "$dir/city.cwscene" >/dev/null

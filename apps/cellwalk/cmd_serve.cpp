@@ -122,10 +122,11 @@ void register_serve(CLI::App& root) {
       ->capture_default_str()->check(integer_in(1, 1'000'000));
   cmd->add_option("--idle-s", a->idle_s, "VDR: drop a session that sends nothing for this long (0: never)")
       ->capture_default_str()->check(number_in(0, 1e6));
-  cmd->add_flag("--web", a->web, "Also serve the browser client: a page and WebSockets on one HTTP port (docs/web.md)");
+  auto* web = cmd->add_flag("--web", a->web, "Also serve the browser client: a page and WebSockets on one HTTP port (docs/web.md)");
   cmd->add_option("--web-port", a->web_port, "HTTP port of --web on 127.0.0.1 (0: a free one, printed)")
-      ->capture_default_str()->check(integer_in(0, 65535));
-  cmd->add_option("--web-root", a->web_root, "The browser client's folder (default: $CELLWALK_WEB, else the source tree's web/)");
+      ->capture_default_str()->check(integer_in(0, 65535))->needs(web);
+  cmd->add_option("--web-root", a->web_root, "The browser client's folder (default: $CELLWALK_WEB, else the source tree's web/)")
+      ->needs(web);
   cmd->add_flag("--quiet", a->quiet, "Do not log sessions");
   cmd->add_flag("--json", a->json, "Print the summary as JSON when stopped");
   cmd->callback([a] {

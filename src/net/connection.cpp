@@ -28,6 +28,7 @@ class TcpMessageStream final : public MessageStream {
     boost::system::error_code ec;
     socket_.set_option(tcp::no_delay(true), ec);  // small requests go at once
   }
+  ~TcpMessageStream() override { *alive_ = false; }
   asio::any_io_executor executor() override { return socket_.get_executor(); }
 
   void read(uint32_t max_payload, std::chrono::milliseconds stall, ReadHandler handler) override {
@@ -59,16 +60,21 @@ class TcpMessageStream final : public MessageStream {
   void read_payload(FrameHeader header, std::chrono::milliseconds stall, ReadHandler handler) {
     payload_.assign(header.length, 0);
     // A peer that sends a header and then stalls is dropped: the session holds a buffer for it.
+    // The timer's handler may run after the read it guards has ended (it fired as the read
+    // finished) or after the stream is gone: it acts only for its own read of a live stream.
+    stalled_ = false;
+    const uint64_t read = ++reads_;
     stall_timer_.expires_after(stall);
-    stall_timer_.async_wait([this](boost::system::error_code ec) {
-      if (!ec) {
-        stalled_ = true;
-        boost::system::error_code ignored;
-        socket_.cancel(ignored);
-      }
+    stall_timer_.async_wait([this, alive = alive_, read](boost::system::error_code ec) {
+      if (ec || !*alive || read != reads_ || !reading_payload_) return;
+      stalled_ = true;
+      boost::system::error_code ignored;
+      socket_.cancel(ignored);
     });
+    reading_payload_ = true;
     asio::async_read(socket_, asio::buffer(payload_), [this, header, handler = std::move(handler)](
                                                           boost::system::error_code ec, size_t) {
+      reading_payload_ = false;
       stall_timer_.cancel();
       if (stalled_) return handler({"stalled in the middle of a message"});
       if (ec)
@@ -81,7 +87,9 @@ class TcpMessageStream final : public MessageStream {
   asio::steady_timer stall_timer_;
   std::array<uint8_t, kFrameHeaderBytes> header_{};
   std::vector<uint8_t> payload_;
-  bool stalled_ = false;
+  bool stalled_ = false, reading_payload_ = false;
+  uint64_t reads_ = 0;
+  std::shared_ptr<bool> alive_ = std::make_shared<bool>(true);
 };
 
 }  // namespace

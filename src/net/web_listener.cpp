@@ -148,6 +148,7 @@ struct WebListener::Impl : std::enable_shared_from_this<WebListener::Impl> {
   Listener listener;
   OnWebSocket on_websocket;
   WebListenerStats stats;
+  bool closed = false;  // after close(): no connection is handed on, none accepted
 
   Impl(asio::io_context& i, WebListenerOptions o) : io(i), options(std::move(o)), listener(io, options.port, options.address) {}
 
@@ -191,6 +192,10 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
         owner_->refused("a WebSocket asked for " + target + ", not " + kWebSocketPath);
         return answer(http::status::not_found, std::string("WebSockets are served on ") + kWebSocketPath + "\n", false);
       }
+      if (!same_origin(request)) {
+        owner_->refused("a WebSocket from another site (Origin " + std::string(request[http::field::origin]) + ")");
+        return answer(http::status::forbidden, "WebSockets are served to this server's own page\n", false);
+      }
       return upgrade(std::move(request));
     }
     if (request.method() != http::verb::get && request.method() != http::verb::head) {
@@ -203,6 +208,16 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
       return answer(http::status::not_found, "no such file: " + target + "\n", request.keep_alive());
     }
     serve_file(request, file);
+  }
+
+  // A browser names the page that opens a WebSocket: only this server's own page may (another
+  // site's script could otherwise stream the world from a server on the user's machine). Tools
+  // that send no Origin are let in.
+  static bool same_origin(const Request& request) {
+    const auto origin = request.find(http::field::origin);
+    if (origin == request.end()) return true;
+    const std::string host(request[http::field::host]);
+    return !host.empty() && (origin->value() == "http://" + host || origin->value() == "https://" + host);
   }
 
   void serve_file(const Request& request, const std::string& file) {
@@ -260,6 +275,7 @@ class HttpSession : public std::enable_shared_from_this<HttpSession> {
     auto held = std::make_shared<Request>(std::move(request));
     raw->accept(*held, [owner = owner_, pending, held](beast::error_code ec) {
       if (ec) return owner->refused("a WebSocket handshake failed (" + ec.message() + ")");
+      if (owner->closed) return;
       ++owner->stats.websockets;
       auto connection = std::make_shared<Connection>(std::move(*pending), owner->options.link, owner->options.limits);
       if (owner->on_websocket) owner->on_websocket(std::move(connection));
@@ -286,7 +302,7 @@ WebListener::WebListener(asio::io_context& io, WebListenerOptions options) {
   impl_ = std::make_shared<Impl>(io, std::move(options));
 }
 
-WebListener::~WebListener() = default;
+WebListener::~WebListener() { close(); }
 
 uint16_t WebListener::port() const { return impl_->listener.port(); }
 
@@ -294,11 +310,15 @@ void WebListener::accept(OnWebSocket on_websocket) {
   impl_->on_websocket = std::move(on_websocket);
   // Weak: the listener is the Impl's, and its handler must not keep the Impl alive.
   impl_->listener.accept([weak = std::weak_ptr<Impl>(impl_)](tcp::socket socket) {
-    if (auto owner = weak.lock()) std::make_shared<HttpSession>(std::move(socket), std::move(owner))->read();
+    if (auto owner = weak.lock(); owner && !owner->closed) std::make_shared<HttpSession>(std::move(socket), std::move(owner))->read();
   });
 }
 
-void WebListener::close() { impl_->listener.close(); }
+void WebListener::close() {
+  impl_->closed = true;
+  impl_->on_websocket = nullptr;
+  impl_->listener.close();
+}
 
 const WebListenerStats& WebListener::stats() const { return impl_->stats; }
 

@@ -94,7 +94,8 @@ class App {
   // `captureEvery`-th frame is read back and handed to `save(frameIndex, colorBase64, idsBase64)`.
   async walk(frames, { captureEvery = 0, save = null, waitMs = 10000 } = {}) {
     const nextFrame = () => new Promise((resolve) => requestAnimationFrame(resolve));
-    const result = { frames: frames.length, stallFrames: 0, lateFrames: 0, startupMs: 0, drawMs: [], frameMs: [], objectsDrawn: [] };
+    const result = { frames: frames.length, stallFrames: 0, lateFrames: 0, startupMs: 0, drawMs: [], frameMs: [], objectsDrawn: [],
+                     lackingObjects: 0, peakGeometryBytes: 0 };
     const t0 = performance.now();
     let previous = t0;
     for (let i = 0; i < frames.length; ++i) {
@@ -111,6 +112,8 @@ class App {
       }
       if (this.client.failure) throw new Error(this.client.failure);
       if (!set.ready) result.lateFrames++;
+      result.lackingObjects += set.lacking ?? 0;
+      result.peakGeometryBytes = Math.max(result.peakGeometryBytes, this.renderer.geometryBytes());
       if (i === 0) result.startupMs = performance.now() - t0;
       const start = performance.now();
       const drawn = this.renderer.draw(camera, set.ids);
@@ -130,6 +133,7 @@ class App {
       await nextFrame();
     }
     const s = this.client.stats;
+    if (this.client.failure) throw new Error(this.client.failure);
     return Object.assign(result, { width, height, budgetBytes: options.budgetBytes, peakResidentBytes: s.peakResident,
                                    residentBytes: s.resident, refusedObjects: s.refusedObjects, transactions: s.transactions,
                                    bytesReceived: s.bytesReceived, objectsReceived: s.objectsReceived, objectsDropped: s.objectsDropped,

@@ -26,9 +26,16 @@ export function decodeMesh(bytes, where) {
   const min = [f32(), f32(), f32()], max = [f32(), f32(), f32()];
   if (flags & kZstd) fail('a zstd-compressed level (the server removes zstd for browsers: update cellwalk serve)');
   if (flags & ~(kHasNormals | kHasColors | kHasUvs | kHasTexture)) fail('unknown flags');
-  if (flags & kHasTexture) u32();  // the texture index: textures are not drawn in the browser yet
+  if (flags & kHasTexture) {
+    if (!(flags & kHasUvs)) fail('a texture without texture coordinates');
+    u32();  // the texture index: textures are not drawn in the browser yet
+  }
   if (positionBits < 1 || positionBits > 16 || normalBits < 2 || normalBits > 16) fail('bit counts out of range');
   if (indexCount % 3 !== 0) fail('index count is not a multiple of 3');
+  for (let k = 0; k < 3; ++k) {
+    const extent = max[k] - min[k];  // a damaged box: negative, NaN or infinite
+    if (vertexCount > 0 && !(extent >= 0 && extent < 3.4028234663852886e38)) fail('bad bounding box');
+  }
   if (vertexCount * 40 + indexCount * 4 > (1 << 30)) fail('mesh larger than the decode limit');
 
   const stream = (what) => {

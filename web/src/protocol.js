@@ -25,6 +25,7 @@ export function parseFrame(buffer) {
   const bytes = new Uint8Array(buffer);
   for (let i = 0; i < 4; ++i) if (bytes[i] !== kMagic[i]) throw new Error('not a cellwalk frame (bad magic)');
   if (bytes[4] !== kProtocolVersion) throw new Error(`protocol version ${bytes[4]}, this page speaks ${kProtocolVersion}`);
+  if (bytes[6] !== 0 || bytes[7] !== 0) throw new Error('reserved header bytes are not zero');
   const length = new DataView(buffer).getUint32(8, true);
   if (length !== buffer.byteLength - kHeaderBytes) throw new Error('a frame whose length is not its message\'s');
   return { type: bytes[5], payload: new DataView(buffer, kHeaderBytes, length) };
@@ -77,6 +78,7 @@ export function parseWelcome(view) {
   const w = { worldBytes: r.u64(), objects: r.u32(), cellCount: r.u32(), originX: r.f64(), originZ: r.f64(), cellSize: r.f64(), rows: r.u32(), cols: r.u32() };
   if (!(w.cellSize > 0) || w.rows === 0 || w.cols === 0) throw new Error('a welcome with an empty grid');
   w.cells = r.u32s(w.rows * w.cols);
+  for (const c of w.cells) if (c !== kNoCell && c >= w.cellCount) throw new Error(`a welcome naming cell ${c} of ${w.cellCount}`);
   r.end();
   return w;
 }
@@ -93,12 +95,18 @@ export function parseCatalog(view) {
   return { colors, boxes };
 }
 
-export function parseRows(view) {
+export const kMaxCellsPerFetch = 64;
+
+export function parseRows(view, cellCount) {
   const r = new Reader(view, 'rows');
   const sequence = r.u32(), n = r.u32(), rows = [];
+  if (n > kMaxCellsPerFetch) throw new Error(`rows: ${n} rows in one reply`);
   for (let i = 0; i < n; ++i) {
     const cell = r.u32();
-    rows.push({ cell, ids: r.u32s(r.u32()) });
+    if (cell >= cellCount) throw new Error(`rows: cell ${cell} of ${cellCount}`);
+    const ids = r.u32s(r.u32());
+    for (let k = 1; k < ids.length; ++k) if (ids[k] < ids[k - 1]) throw new Error('rows: a row is not sorted');
+    rows.push({ cell, ids });
   }
   r.end();
   return { sequence, rows };

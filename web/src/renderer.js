@@ -114,7 +114,9 @@ export class Renderer {
   add(id, decoded) {
     const geometry = new THREE.BufferGeometry();
     geometry.setAttribute('position', new THREE.BufferAttribute(decoded.positions, 3));
-    geometry.setAttribute('normal', new THREE.BufferAttribute(decoded.normals ?? new Float32Array(decoded.positions.length), 3));
+    // No normals: the attribute is left out and reads (0, 0, 0), lit by the ambient term alone,
+    // as the native renderer draws such a mesh.
+    if (decoded.normals) geometry.setAttribute('normal', new THREE.BufferAttribute(decoded.normals, 3));
     if (decoded.colors) geometry.setAttribute('a_color', new THREE.BufferAttribute(decoded.colors, 4, true));
     geometry.setIndex(new THREE.BufferAttribute(decoded.indices, 1));
     const mesh = new THREE.Mesh(geometry, this.colorMaterial);
@@ -131,6 +133,17 @@ export class Renderer {
     };
     this.scene.add(mesh);
     this.meshes.set(id, mesh);
+  }
+
+  // The bytes of every array the meshes hold (positions, normals, colours, indices): the same
+  // geometry as the stream client's count, summed apart from it.
+  geometryBytes() {
+    let bytes = 0;
+    for (const mesh of this.meshes.values()) {
+      for (const attribute of Object.values(mesh.geometry.attributes)) bytes += attribute.array.byteLength;
+      bytes += mesh.geometry.index.array.byteLength;
+    }
+    return bytes;
   }
 
   remove(id) {

@@ -2,14 +2,20 @@
 // §3.10–3.11), the page's counterpart of src/systems/pvs_stream_client: at most `entries` rows
 // of visible sets and the objects of their union, one transaction at a time (the rows of the
 // prefetching area it lacks, and only the objects it does not hold, in one round trip), the
-// objects it deleted named in its next fetch. A hard budget bounds the decoded geometry it
-// holds: an object that does not fit after rows outside the viewer's cell are given up is
-// refused (and named as dropped, so the server's mirror stays true).
+// objects it deleted named in its next fetch.
+//
+// A hard budget bounds what it holds: the rows' ids and the decoded geometry. What does not fit
+// makes rows give way (§7.4's order, then the area's rows but the viewer's own); an object that
+// still does not fit, or that no row it keeps sees any more, is not kept and is named dropped, so
+// the server's mirror of what the page holds stays true. Once the budget has replaced a row of
+// the prefetching area, only the viewer's own cell is asked for until it changes cell (asking
+// again for those rows would replace them again, fetch after fetch), as the native client does.
 import * as protocol from './protocol.js';
 import { ViewcellGrid, prefetchingArea, replacementVictim } from './prefetch.js';
 import { decodeMesh, ready as decoderReady } from './mesh_codec.js';
 
 const key = (c) => `${c.row},${c.col}`;
+const same = (a, b) => a.row === b.row && a.col === b.col;
 
 export class StreamClient {
   // options: { budgetBytes, prefetch: 'pbnp' | 'snp', band, entries, level, onObject(id, mesh), onDrop(id) }
@@ -17,11 +23,13 @@ export class StreamClient {
     this.url = url;
     this.options = Object.assign({ budgetBytes: 256 << 20, prefetch: 'pbnp', band: 0.25, entries: 9, level: 0 }, options);
     this.rows = new Map();      // cell key → { cell, ids: Uint32Array }, in the order cached (oldest first)
-    this.held = new Map();      // object id → decoded bytes
-    this.refused = new Set();   // objects sent that the budget could not hold
+    this.seenBy = new Map();    // object id → how many cached rows hold it
+    this.held = new Map();      // object id → bytes charged for it
+    this.refused = new Set();   // objects of cached rows the budget could not hold
     this.dropped = [];          // deleted since the last fetch (§7.4's ΔS_d)
-    this.inFlight = null;       // { sequence, cells: Set of keys, started }
+    this.inFlight = null;       // { sequence, started }
     this.area = [];
+    this.tight = false;
     this.sequence = 0;
     this.stats = { transactions: 0, rowsReceived: 0, objectsReceived: 0, objectsDropped: 0, bytesReceived: 0,
                    resident: 0, peakResident: 0, refusedObjects: 0, transactionMsMax: 0, transactionMsSum: 0 };
@@ -36,15 +44,29 @@ export class StreamClient {
       this.ws.onopen = resolve;
       this.ws.onerror = () => reject(new Error(`cannot reach ${this.url}: is \`cellwalk serve --web\` running?`));
     });
-    const welcomed = new Promise((resolve) => { this.onWelcome = resolve; });
-    const catalogued = new Promise((resolve) => { this.onCatalog = resolve; });
+    // The welcome and the catalog, or the reason the session ended before them.
+    const started = new Promise((resolve, reject) => {
+      const parts = {};
+      const settle = () => { if (parts.welcome && parts.catalog) resolve(parts); };
+      this.onWelcome = (w) => { parts.welcome = w; settle(); };
+      this.onCatalog = (c) => { parts.catalog = c; settle(); };
+      this.onFailure = (reason) => reject(new Error(reason));
+    });
     this.ws.onmessage = (event) => this.receive(event.data);
-    this.ws.onclose = () => { if (!this.failure) this.failure = 'the server closed the connection'; };
+    this.ws.onclose = () => this.fail('the server closed the connection');
     this.ws.send(protocol.hello());
     this.ws.send(protocol.catalogRequest());
-    this.welcome = await welcomed;
-    this.grid = new ViewcellGrid(this.welcome);
-    this.catalog = await catalogued;
+    const { welcome, catalog } = await started;
+    this.welcome = welcome;
+    this.grid = new ViewcellGrid(welcome);
+    this.catalog = catalog;
+  }
+
+  fail(reason) {
+    if (this.failure) return;
+    this.failure = reason;
+    this.onFailure?.(reason);
+    this.ws.close();
   }
 
   receive(data) {
@@ -54,15 +76,14 @@ export class StreamClient {
       switch (type) {
         case protocol.Message.welcome: return this.onWelcome(protocol.parseWelcome(payload));
         case protocol.Message.catalog: return this.onCatalog(protocol.parseCatalog(payload));
-        case protocol.Message.rows: return this.receiveRows(protocol.parseRows(payload));
+        case protocol.Message.rows: return this.receiveRows(protocol.parseRows(payload, this.welcome.cellCount));
         case protocol.Message.object: return this.receiveObject(protocol.parseObject(payload));
         case protocol.Message.done: return this.finishTransaction(protocol.parseDone(payload));
         case protocol.Message.error: throw new Error(`the server refused: ${protocol.parseError(payload)}`);
         default: throw new Error(`an unexpected message type ${type}`);
       }
     } catch (e) {
-      this.failure = e.message;
-      this.ws.close();
+      this.fail(e.message);
     }
   }
 
@@ -70,16 +91,15 @@ export class StreamClient {
   // prefetching area the client lacks, when none is in flight.
   update(x, z) {
     const cell = this.grid.cellAt(x, z);
+    if (this.current && !same(cell, this.current)) this.tight = false;
     this.current = cell;
-    const region = this.grid.regionAt(x, z, this.options.band);
-    const area = prefetchingArea(this.options.prefetch, this.grid, cell, region);
-    if (area.map(key).join(';') !== this.area.map(key).join(';')) this.area = area;
+    this.area = prefetchingArea(this.options.prefetch, this.grid, cell, this.grid.regionAt(x, z, this.options.band));
     if (this.inFlight || this.failure) return;
-    const wanted = this.area.filter((c) => !this.rows.has(key(c)));
+    const asked = this.tight ? this.area.filter((c) => same(c, cell)) : this.area;
+    const wanted = asked.filter((c) => !this.rows.has(key(c)));
     if (wanted.length === 0) return;
-    const cells = wanted.map((c) => this.grid.id(c));
-    this.inFlight = { sequence: this.sequence, cells: new Set(wanted.map(key)), started: performance.now() };
-    this.ws.send(protocol.fetchRequest(this.sequence++, this.options.level, cells, this.dropped));
+    this.inFlight = { sequence: this.sequence, started: performance.now() };
+    this.ws.send(protocol.fetchRequest(this.sequence++, this.options.level, wanted.map((c) => this.grid.id(c)), this.dropped));
     this.dropped = [];
     this.stats.transactions++;
   }
@@ -87,8 +107,11 @@ export class StreamClient {
   receiveRows(reply) {
     for (const { cell, ids } of reply.rows) {
       const at = this.cellOfId(cell);
-      this.rows.delete(key(at));
+      if (this.rows.has(key(at))) this.evictRows([at]);
+      if (!this.makeRoom(ids.byteLength, at)) throw new Error(`the budget of ${this.options.budgetBytes} bytes cannot hold the visible set of cell ${cell}`);
       this.rows.set(key(at), { cell: at, ids });
+      for (const id of ids) this.seenBy.set(id, (this.seenBy.get(id) ?? 0) + 1);
+      this.charge(ids.byteLength);
       this.stats.rowsReceived++;
     }
   }
@@ -102,14 +125,15 @@ export class StreamClient {
   receiveObject(o) {
     this.stats.objectsReceived++;
     if (o.id >= this.catalog.colors.length) throw new Error(`object ${o.id} is not in the catalog`);
+    if (this.held.has(o.id)) throw new Error(`object ${o.id} sent again while held`);
+    const refuse = () => { this.dropped.push(o.id); };  // the server counts it held: tell it otherwise
+    if (!this.seenBy.get(o.id)) return refuse();       // its rows gave way to the budget meanwhile
     const mesh = decodeMesh(o.bytes, `object ${o.id} level ${o.level}`);
-    if (!this.makeRoom(mesh.bytes)) {
+    if (!this.makeRoom(mesh.bytes, this.current)) {
       this.refused.add(o.id);
-      this.dropped.push(o.id);  // the server counts it held: tell it otherwise
       this.stats.refusedObjects++;
-      return;
+      return refuse();
     }
-    this.refused.delete(o.id);
     this.held.set(o.id, mesh.bytes);
     this.charge(mesh.bytes);
     this.options.onObject?.(o.id, mesh);
@@ -120,14 +144,17 @@ export class StreamClient {
     this.stats.peakResident = Math.max(this.stats.peakResident, this.stats.resident);
   }
 
-  // Frees rows until `bytes` more fit: rows outside the prefetching area first (§7.4's order),
-  // then the area's rows but the viewer's own. False when even that is not enough.
-  makeRoom(bytes) {
-    const fits = () => this.stats.resident + bytes <= this.options.budgetBytes;
-    while (!fits()) {
-      const cells = [...this.rows.values()].map((r) => r.cell);
+  // Frees rows until `bytes` more fit, never the row of `keep`: rows outside the prefetching
+  // area first (§7.4's order), then the area's rows. False when that is not enough.
+  makeRoom(bytes, keep) {
+    if (bytes > this.options.budgetBytes) return false;
+    while (this.stats.resident + bytes > this.options.budgetBytes) {
+      const cells = [...this.rows.values()].map((r) => r.cell).filter((c) => !keep || !same(c, keep));
       let victim = replacementVictim(cells, this.area, this.current);
-      if (victim < 0) victim = cells.findIndex((c) => !(c.row === this.current.row && c.col === this.current.col));
+      if (victim < 0 && cells.length) {
+        victim = 0;  // the oldest row of the area: the budget replaces the area's rows
+        this.tight = true;
+      }
       if (victim < 0) return false;
       this.evictRows([cells[victim]]);
     }
@@ -141,42 +168,54 @@ export class StreamClient {
     this.stats.transactionMsSum += ms;
     this.inFlight = null;
     // §7.4: at most `entries` rows, never one of the area.
-    const over = [];
-    const cells = [...this.rows.values()].map((r) => r.cell);
-    while (cells.length - over.length > this.options.entries) {
-      const kept = cells.filter((c) => !over.includes(c));
-      const victim = replacementVictim(kept, this.area, this.current);
+    while (this.rows.size > this.options.entries) {
+      const cells = [...this.rows.values()].map((r) => r.cell);
+      const victim = replacementVictim(cells, this.area, this.current);
       if (victim < 0) break;
-      over.push(kept[victim]);
+      this.evictRows([cells[victim]]);
     }
-    if (over.length) this.evictRows(over);
   }
 
   // Deletes rows and the objects no kept row sees (ΔS_d = S_d − S_c).
   evictRows(cells) {
-    for (const c of cells) this.rows.delete(key(c));
-    const kept = new Set();
-    for (const { ids } of this.rows.values()) for (const id of ids) kept.add(id);
-    for (const [id, bytes] of this.held) {
-      if (kept.has(id)) continue;
-      this.held.delete(id);
-      this.stats.resident -= bytes;
-      this.dropped.push(id);
-      this.stats.objectsDropped++;
-      this.options.onDrop?.(id);
+    for (const c of cells) {
+      const row = this.rows.get(key(c));
+      if (!row) continue;
+      this.rows.delete(key(c));
+      this.stats.resident -= row.ids.byteLength;
+      for (const id of row.ids) {
+        const n = this.seenBy.get(id) - 1;
+        if (n > 0) { this.seenBy.set(id, n); continue; }
+        this.seenBy.delete(id);
+        this.refused.delete(id);
+        const bytes = this.held.get(id);
+        if (bytes === undefined) continue;
+        this.held.delete(id);
+        this.stats.resident -= bytes;
+        this.dropped.push(id);
+        this.stats.objectsDropped++;
+        this.options.onDrop?.(id);
+      }
     }
-    for (const id of this.refused) if (!kept.has(id)) this.refused.delete(id);
   }
 
-  // The viewer's visible set: { ready, ids }. Not ready while its row or any of its objects has
-  // not arrived (the frame would miss them); objects the budget refused never arrive.
+  // The viewer's visible set: { ready, ids, lacking }. Not ready while its row or any of its
+  // objects is still to come; `lacking` counts those the budget refused.
   visibleSet(x, z) {
     const cell = this.grid.cellAt(x, z);
-    if (!this.grid.contains(cell)) return { ready: true, ids: [], outside: true };
+    if (!this.grid.contains(cell)) return { ready: true, ids: [], lacking: 0, outside: true };
     const row = this.rows.get(key(cell));
     if (!row) return { ready: false, ids: [] };
-    const inFlight = this.inFlight !== null;
-    for (const id of row.ids) if (!this.held.has(id) && !(this.refused.has(id) || !inFlight)) return { ready: false, ids: row.ids };
-    return { ready: true, ids: row.ids, lacking: row.ids.filter((id) => !this.held.has(id)).length };
+    let lacking = 0;
+    for (const id of row.ids) {
+      if (this.held.has(id)) continue;
+      if (!this.refused.has(id)) {
+        // Nothing in flight can bring it: the row is asked for again.
+        if (!this.inFlight) this.evictRows([cell]);
+        return { ready: false, ids: row.ids };
+      }
+      lacking++;
+    }
+    return { ready: true, ids: row.ids, lacking };
   }
 }

@@ -1,7 +1,7 @@
 // Walks a recorded path in the browser client, in Debian's Chromium driven by playwright-core
 // (no browser is downloaded), and writes what it saw for `cellwalk compare --captured`:
 //   node web/test/walk.mjs --url http://127.0.0.1:PORT/ --path FILE --out DIR
-//        [--every 10] [--width 640] [--height 480] [--budget MiB] [--prefetch pbnp|snp]
+//        [--every 10] [--width 640] [--height 480] [--budget MiB] [--prefetch pbnp|snp] [--timeout s]
 // DIR gets frameN.rgba (RGBA8, rows bottom-up as OpenGL reads them) and frameN.ids (u32 per pixel, id + 1, 0 for
 // the background) for every --every-th frame, captured.json (the frames, the walk's figures)
 // and browser.png (the page, overlay included). Exit 77 (a skip to ctest) when Chromium cannot start.
@@ -59,10 +59,15 @@ try {
     captured.push(index);
   });
   const query = `?width=${a.width}&height=${a.height}&budget=${a.budget}&prefetch=${a.prefetch}`;
+  // Every wait is bounded: a page that neither finishes nor fails is a failure after --timeout s.
+  page.setDefaultTimeout(a.timeout * 1000);
+  const bounded = (promise, what) => Promise.race([promise, new Promise((_, reject) =>
+    setTimeout(() => reject(new Error(`${what} took more than ${a.timeout} s`)), a.timeout * 1000).unref())]);
   await page.goto(new URL(query, a.url).href);
-  await page.evaluate(() => window.cellwalk.ready).catch((e) => { throw new Error(`the page did not start: ${e.message}; ${problems.join('; ')}`); });
-  const result = await page.evaluate(({ frames, every }) =>
-    window.cellwalk.walk(frames, { captureEvery: every, save: (i, c, d) => window.cellwalkSave(i, c, d) }), { frames, every: a.every });
+  await bounded(page.evaluate(() => window.cellwalk.ready), 'the page\'s start')
+    .catch((e) => { throw new Error(`the page did not start: ${e.message}; ${problems.join('; ')}`); });
+  const result = await bounded(page.evaluate(({ frames, every }) =>
+    window.cellwalk.walk(frames, { captureEvery: every, save: (i, c, d) => window.cellwalkSave(i, c, d) }), { frames, every: a.every }), 'the walk');
   await page.screenshot({ path: path.join(a.out, 'browser.png') });
   if (problems.length) throw new Error(`the page reported: ${problems.join('; ')}`);
   const summary = { width: a.width, height: a.height, path: path.resolve(a.path), frames: captured.sort((x, y) => x - y), walk: result };

@@ -30,9 +30,11 @@ struct WebListenerStats {
   uint64_t requests = 0, files_served = 0, refused = 0, websockets = 0, file_bytes = 0;
 };
 
-// Serves until close(). A request is read within 10 s of its first byte or the connection is
-// closed; a path that leaves the root, a method other than GET and HEAD, or a malformed request
-// gets a 4xx answer and nothing from the disk. REQUIRES: used only from `io`'s thread.
+// Serves until close(). A connection that takes more than 10 s to send a request (from the end of
+// the one before), or to take an answer, is closed; a path that leaves the root, a method other
+// than GET and HEAD, a malformed request, or a WebSocket opened by another site's page (its
+// Origin is not this server) gets a 4xx answer and nothing from the disk. REQUIRES: used only
+// from `io`'s thread.
 class WebListener {
  public:
   using OnWebSocket = std::function<void(std::shared_ptr<Connection>)>;
@@ -41,6 +43,7 @@ class WebListener {
   ~WebListener();
   uint16_t port() const;
   // Starts accepting; each WebSocket opened on /ws becomes a Connection (not yet started).
+  // After close() (or the listener's end) none is handed on.
   void accept(OnWebSocket on_websocket);
   void close();
   const WebListenerStats& stats() const;

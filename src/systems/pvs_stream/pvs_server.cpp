@@ -98,6 +98,7 @@ struct PvsServer::Impl {
     std::vector<uint8_t> held;  // the server's mirror of the client's objects
     bool greeted = false;
     bool web = false;  // a browser: levels go without zstd
+    bool catalogued = false;
   };
 
   const World& world;
@@ -174,6 +175,8 @@ struct PvsServer::Impl {
       }
       if (type == uint8_t(PvsMessage::catalog_request)) {
         parse_catalog_request(payload);
+        if (s.catalogued) throw net::ProtocolError("a second catalog request: the catalog is sent once a session");
+        s.catalogued = true;
         s.connection->send(uint8_t(PvsMessage::catalog), catalog);
         return;
       }
