@@ -117,7 +117,7 @@ class App {
       if (i === 0) result.startupMs = performance.now() - t0;
       const start = performance.now();
       const drawn = this.renderer.draw(camera, set.ids);
-      this.renderer.gl.getContext().finish();
+      this.renderer.waitForGpu();
       result.drawMs.push(performance.now() - start);
       result.objectsDrawn.push(drawn.objects);
       if (save && captureEvery > 0 && i % captureEvery === 0) {

@@ -182,6 +182,13 @@ export class Renderer {
     return { objects, triangles };
   }
 
+  // Returns when the GPU has drawn what was asked of it. gl.finish() does not wait for that in
+  // Chromium (the GPU process may still be rasterising); reading a pixel back does.
+  waitForGpu() {
+    const gl = this.gl.getContext();
+    gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, this.pixel ??= new Uint8Array(4));
+  }
+
   // The frame as the native renderer's images: RGBA8 colour and u32 ids, rows bottom-up as
   // OpenGL reads them (render/image.hpp).
   capture(camera, ids) {
