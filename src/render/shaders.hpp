@@ -1,7 +1,8 @@
 // GLSL 4.50 sources of the renderer's programs. Lighting is fixed so images are deterministic
 // and comparable between strategies: one directional light plus ambient, two-sided (meshes from
 // the wild have inconsistent winding and nothing is culled, so a normal is turned towards the
-// eye rather than trusted to match the winding).
+// eye rather than trusted to match the winding). The browser client draws with the same mesh and
+// backdrop programs in GLSL ES (web/src/renderer.js): a change here is made there too.
 #pragma once
 
 namespace cellwalk::render {

@@ -7,6 +7,8 @@ import { viewProjection, frustumPlanes, boxInFrustum } from './view.js';
 
 const kBackground = [178 / 255, 204 / 255, 230 / 255];
 
+// The GLSL below is src/render/shaders.hpp's, in GLSL ES 3.00: a change there is made here too
+// (tests/web_walk_test.sh compares the two renderers' frames and fails when they part).
 const meshVertex = `precision highp float; precision highp int;
 in vec3 position; in vec3 normal; in vec4 a_color;
 uniform mat4 u_view_projection; uniform vec4 u_color; uniform int u_has_colors;
